@@ -1,0 +1,22 @@
+//! # lgh-core: many-lights algorithms
+//!
+//! The scene-independent part of lgh: the data the many-lights methods work on and the
+//! algorithms of the papers, with no file I/O, no ray tracing and no global state.
+//!
+//! | module | what it holds | paper |
+//! | --- | --- | --- |
+//! | [`rng`] | counter-based random numbers (deterministic whatever the thread count) | - |
+//! | [`sampling`] | warps (cosine hemisphere, triangle, raised cosine) and a discrete distribution | - |
+//! | [`color`] | luminance and RGB helpers | - |
+//! | [`vpl`] | virtual point lights, stored structure-of-arrays | Keller 1997; LGH 2019 section 3 |
+//!
+//! Everything here is plain data plus functions, so that other engines can use it with their
+//! own ray tracer.
+#![deny(missing_docs)]
+
+pub mod color;
+pub mod rng;
+pub mod sampling;
+pub mod vpl;
+
+pub use glam::{Vec2, Vec3, Vec3A};
