@@ -1,1 +1,41 @@
-//! placeholder
+//! # lgh-render: the CPU renderer
+//!
+//! Ray tracing, the passes of a frame and image files. [`frame`] is the recipe of a frame and
+//! the best place to start reading.
+//!
+//! | module | what it does |
+//! | --- | --- |
+//! | [`accel`] | BVH over all triangles: closest-hit and any-hit rays |
+//! | [`world`] | a scene prepared for rendering; surface points; shadow-ray offsets |
+//! | [`lights`] | primary lights, sampled by power (light paths) or per area (direct light) |
+//! | [`gbuffer`] | primary visibility: position, normal, albedo, depth, emission |
+//! | [`direct`] | direct lighting with exact shadow rays |
+//! | [`vpl_gen`] | VPLs by light tracing |
+//! | [`brute`] | the brute-force many-lights reference |
+//! | [`frame`] | the passes in order, with timings |
+//! | [`image`], [`tonemap`], [`metrics`] | EXR/PNG files, tone mapping, image differences |
+//! | [`raybench`] | ray throughput measurement |
+//!
+//! Every pass is parallel (rayon) and deterministic: the same seed gives the same image
+//! whatever the thread count.
+#![deny(missing_docs)]
+
+pub mod accel;
+pub mod brute;
+pub mod direct;
+pub mod frame;
+pub mod gbuffer;
+pub mod image;
+pub mod lights;
+pub mod metrics;
+pub mod passes;
+pub mod progress;
+pub mod raybench;
+pub mod tonemap;
+pub mod vpl_gen;
+pub mod world;
+
+pub use frame::{Component, Frame, Method, RenderSettings, render_frame};
+pub use image::Image;
+pub use progress::{Progress, Silent};
+pub use world::World;

@@ -1,0 +1,87 @@
+//! The G-buffer: what the camera sees through each pixel centre (one primary ray per pixel).
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+use crate::world::{SurfacePoint, World};
+use lgh_scene::camera::CameraFrame;
+
+/// Per-pixel surface attributes, structure-of-arrays, row-major from the top-left pixel.
+/// Pixels that see nothing have `depth = f32::INFINITY` and zero everywhere else.
+#[derive(Clone, Debug)]
+pub struct GBuffer {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// World position.
+    pub position: Vec<Vec3>,
+    /// Unit shading normal, facing the camera.
+    pub normal: Vec<Vec3>,
+    /// Unit geometric normal, facing the camera.
+    pub geo_normal: Vec<Vec3>,
+    /// Diffuse albedo (factor x texture).
+    pub albedo: Vec<Vec3>,
+    /// Linear depth: distance along the camera's viewing direction.
+    pub depth: Vec<f32>,
+    /// Emitted radiance towards the camera.
+    pub emission: Vec<Vec3>,
+}
+
+impl GBuffer {
+    /// Traces one primary ray per pixel centre, in parallel.
+    #[must_use]
+    pub fn render(world: &World, frame: &CameraFrame, width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        let hits: Vec<Option<SurfacePoint>> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let px = Vec2::new(
+                    (i % width as usize) as f32 + 0.5,
+                    (i / width as usize) as f32 + 0.5,
+                );
+                world.trace(frame.origin, frame.direction(px))
+            })
+            .collect();
+        let mut g = Self {
+            width,
+            height,
+            position: vec![Vec3::ZERO; n],
+            normal: vec![Vec3::ZERO; n],
+            geo_normal: vec![Vec3::ZERO; n],
+            albedo: vec![Vec3::ZERO; n],
+            depth: vec![f32::INFINITY; n],
+            emission: vec![Vec3::ZERO; n],
+        };
+        for (i, s) in hits.iter().enumerate() {
+            if let Some(s) = s {
+                g.position[i] = s.position;
+                g.normal[i] = s.normal;
+                g.geo_normal[i] = s.geo_normal;
+                g.albedo[i] = s.albedo;
+                g.depth[i] = (s.position - frame.origin).dot(frame.forward);
+                g.emission[i] = s.emission;
+            }
+        }
+        g
+    }
+
+    /// Number of pixels.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.depth.len()
+    }
+
+    /// True for a zero-size buffer.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.depth.is_empty()
+    }
+
+    /// True if pixel `i` sees a surface.
+    #[inline]
+    #[must_use]
+    pub fn is_hit(&self, i: usize) -> bool {
+        self.depth[i].is_finite()
+    }
+}

@@ -1,0 +1,49 @@
+//! Diffuse materials with optional emission.
+
+use glam::{Vec2, Vec3};
+
+use crate::texture::Texture;
+
+/// A Lambertian material: albedo = `albedo` x texture (if any); emitted radiance `emission`
+/// (one-sided, on the front face: counter-clockwise winding, as in glTF and OBJ).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name from the file, for messages.
+    pub name: String,
+    /// Diffuse reflectance factor (linear RGB, each channel in [0, 1]).
+    pub albedo: Vec3,
+    /// Index into [`crate::Scene::textures`] of a colour texture multiplied with `albedo`.
+    pub albedo_texture: Option<u32>,
+    /// Emitted radiance (linear RGB, W / (sr m^2)); zero for non-emitters.
+    pub emission: Vec3,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            name: "default".into(),
+            albedo: Vec3::splat(0.8),
+            albedo_texture: None,
+            emission: Vec3::ZERO,
+        }
+    }
+}
+
+impl Material {
+    /// The albedo at texture coordinate `uv`, clamped to [0, 1] so that no surface creates
+    /// energy.
+    #[must_use]
+    pub fn albedo_at(&self, textures: &[Texture], uv: Vec2) -> Vec3 {
+        let t = self
+            .albedo_texture
+            .and_then(|i| textures.get(i as usize))
+            .map_or(Vec3::ONE, |t| t.sample(uv));
+        (self.albedo * t).clamp(Vec3::ZERO, Vec3::ONE)
+    }
+
+    /// True if the material emits light.
+    #[must_use]
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+}

@@ -1,0 +1,124 @@
+//! One world-space triangle mesh, structure-of-arrays.
+
+use glam::{Mat4, Vec2, Vec3};
+
+/// All triangles of a scene in world space.
+///
+/// Vertices are shared through `triangles` (indices into the per-vertex arrays). A normal of
+/// zero length means "none given": the face normal is used there (real files have such
+/// vertices, e.g. Sponza's `vn 0 0 0`).
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Vertex normals (unit length, or zero for "use the face normal").
+    pub normals: Vec<Vec3>,
+    /// Vertex texture coordinates (zero when the file has none).
+    pub uvs: Vec<Vec2>,
+    /// Vertex indices of each triangle, counter-clockwise seen from the front.
+    pub triangles: Vec<[u32; 3]>,
+    /// Material index of each triangle.
+    pub materials: Vec<u32>,
+}
+
+/// Vertex data of one primitive, before it is placed in the world.
+#[derive(Clone, Debug, Default)]
+pub struct Primitive {
+    /// Object-space positions.
+    pub positions: Vec<Vec3>,
+    /// Object-space normals; empty if the file has none.
+    pub normals: Vec<Vec3>,
+    /// Texture coordinates; empty if the file has none.
+    pub uvs: Vec<Vec2>,
+    /// Triangle vertex indices into the arrays above.
+    pub indices: Vec<[u32; 3]>,
+    /// Material of every triangle.
+    pub material: u32,
+}
+
+impl Mesh {
+    /// Number of triangles.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// True if there is no triangle.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+
+    /// Appends a primitive transformed by `to_world`; normals use the inverse transpose.
+    /// Indices that point past the vertex arrays are dropped (the loaders validate first).
+    pub fn append(&mut self, prim: &Primitive, to_world: Mat4) {
+        let base = self.positions.len() as u32;
+        let normal_m = to_world.inverse().transpose();
+        let n = prim.positions.len();
+        self.positions
+            .extend(prim.positions.iter().map(|&p| to_world.transform_point3(p)));
+        self.normals.extend((0..n).map(|i| {
+            prim.normals
+                .get(i)
+                .map(|&v| normal_m.transform_vector3(v).normalize_or_zero())
+                .unwrap_or(Vec3::ZERO)
+        }));
+        self.uvs
+            .extend((0..n).map(|i| prim.uvs.get(i).copied().unwrap_or(Vec2::ZERO)));
+        for t in &prim.indices {
+            if t.iter().all(|&i| (i as usize) < n) {
+                self.triangles.push([t[0] + base, t[1] + base, t[2] + base]);
+                self.materials.push(prim.material);
+            }
+        }
+    }
+
+    /// The three vertex positions of triangle `t`.
+    #[inline]
+    #[must_use]
+    pub fn vertices(&self, t: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.triangles[t];
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
+    }
+
+    /// Unnormalised face normal (v1 - v0) x (v2 - v0), twice the area in length.
+    #[inline]
+    #[must_use]
+    pub fn face_cross(&self, t: usize) -> Vec3 {
+        let [a, b, c] = self.vertices(t);
+        (b - a).cross(c - a)
+    }
+
+    /// Area of triangle `t`.
+    #[must_use]
+    pub fn area(&self, t: usize) -> f32 {
+        0.5 * self.face_cross(t).length()
+    }
+
+    /// Axis-aligned bounds (min, max) of the vertices used by triangles.
+    #[must_use]
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for t in 0..self.len() {
+            for v in self.vertices(t) {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Removes every triangle for which `keep` returns false.
+    pub fn retain_triangles(&mut self, mut keep: impl FnMut(&Mesh, usize) -> bool) {
+        let keep_flags: Vec<bool> = (0..self.len()).map(|t| keep(self, t)).collect();
+        let mut k = keep_flags.iter();
+        self.triangles.retain(|_| *k.next().unwrap_or(&false));
+        let mut k = keep_flags.iter();
+        self.materials.retain(|_| *k.next().unwrap_or(&false));
+    }
+}

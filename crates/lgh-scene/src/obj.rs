@@ -1,0 +1,122 @@
+//! Wavefront OBJ/MTL loading (with the `tobj` crate).
+//!
+//! Faces are triangulated; `Kd` is the albedo, `map_Kd` its texture (sRGB, relative to the
+//! MTL file), `Ke` the emitted radiance. A missing MTL file or texture is a warning, not an
+//! error: the geometry still renders with default materials.
+
+use std::path::Path;
+
+use glam::{Mat4, Vec2, Vec3};
+
+use crate::mesh::Primitive;
+use crate::{Material, Scene, SceneError, Texture};
+
+/// Loads an OBJ file (and the MTL files it names) into a scene without camera or punctual
+/// lights. Call [`Scene::finish`] (or use [`crate::load`]) before rendering.
+///
+/// # Errors
+/// The file cannot be read or does not parse as OBJ.
+pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    if !path.is_file() {
+        return Err(SceneError::new(path, "file not found"));
+    }
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let (models, materials) = tobj::load_obj(path, &opts)
+        .map_err(|e| SceneError::new(path, format!("cannot parse OBJ: {e}")))?;
+    let mut scene = Scene::new(file_stem(path));
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let obj_materials = match materials {
+        Ok(m) => m,
+        Err(e) => {
+            scene
+                .report
+                .warnings
+                .push(format!("material library not loaded ({e}); using a grey default"));
+            Vec::new()
+        }
+    };
+    for m in &obj_materials {
+        let albedo_texture = m
+            .diffuse_texture
+            .as_deref()
+            .and_then(|name| load_texture(&mut scene, &dir.join(name)));
+        scene.materials.push(Material {
+            name: m.name.clone(),
+            albedo: m.diffuse.map_or(Vec3::splat(0.8), Vec3::from_array),
+            albedo_texture,
+            emission: m.emissive.map_or(Vec3::ZERO, Vec3::from_array),
+        });
+    }
+    let default_material = scene.materials.len() as u32;
+    let mut uses_default = false;
+    for model in &models {
+        let m = &model.mesh;
+        let material = match m.material_id {
+            Some(id) if id < obj_materials.len() => id as u32,
+            _ => {
+                uses_default = true;
+                default_material
+            }
+        };
+        let prim = Primitive {
+            positions: m
+                .positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect(),
+            normals: m
+                .normals
+                .chunks_exact(3)
+                .map(|n| Vec3::new(n[0], n[1], n[2]))
+                .collect(),
+            uvs: m
+                .texcoords
+                .chunks_exact(2)
+                .map(|t| Vec2::new(t[0], t[1]))
+                .collect(),
+            indices: m
+                .indices
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]])
+                .collect(),
+            material,
+        };
+        scene.mesh.append(&prim, Mat4::IDENTITY);
+    }
+    if uses_default {
+        scene.materials.push(Material::default());
+    }
+    Ok(scene)
+}
+
+/// Loads an 8-bit image file as an sRGB texture; on failure records a warning and returns
+/// `None`.
+pub(crate) fn load_texture(scene: &mut Scene, path: &Path) -> Option<u32> {
+    match image::open(path) {
+        Ok(img) => {
+            let rgb = img.to_rgb8();
+            let tex = Texture::from_srgb8(rgb.width(), rgb.height(), 3, rgb.as_raw())?;
+            scene.textures.push(tex);
+            Some(scene.textures.len() as u32 - 1)
+        }
+        Err(e) => {
+            scene.report.warnings.push(format!(
+                "texture {} not loaded ({e}); using the material colour",
+                path.display()
+            ));
+            None
+        }
+    }
+}
+
+/// The file name without extension, for scene names.
+pub(crate) fn file_stem(path: &Path) -> String {
+    path.file_stem()
+        .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
+}

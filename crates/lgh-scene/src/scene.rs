@@ -1,0 +1,178 @@
+//! The scene: everything a frame is rendered from.
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::{Camera, Light, Material, Mesh, SceneError, Texture};
+
+/// A scene in world space, ready to render.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// A short name (the file stem, or `cornell` for the built-in scene).
+    pub name: String,
+    /// All triangles.
+    pub mesh: Mesh,
+    /// Materials, indexed by [`Mesh::materials`].
+    pub materials: Vec<Material>,
+    /// Textures, indexed by [`Material::albedo_texture`].
+    pub textures: Vec<Texture>,
+    /// Point, spot and directional lights (emissive triangles are found from materials).
+    pub lights: Vec<Light>,
+    /// The camera; `None` until a file or [`Scene::finish`] provides one.
+    pub camera: Option<Camera>,
+    /// Exposure multiplier applied before tone mapping to PNG (1 = none).
+    pub exposure: f32,
+    /// What loading found and fixed, for the user.
+    pub report: SceneReport,
+}
+
+/// Facts found while loading, worth telling the user.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SceneReport {
+    /// Zero-area triangles removed.
+    pub degenerate_triangles: usize,
+    /// Non-fatal problems (missing textures, unsupported primitives), one line each.
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// An empty scene named `name`.
+    #[must_use]
+    pub fn new(name: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            mesh: Mesh::default(),
+            materials: Vec::new(),
+            textures: Vec::new(),
+            lights: Vec::new(),
+            camera: None,
+            exposure: 1.0,
+            report: SceneReport::default(),
+        }
+    }
+
+    /// Validates and completes a loaded scene; `path` names the file in errors.
+    ///
+    /// Removes zero-area triangles (counted in [`Scene::report`]), and fails on a non-finite
+    /// vertex, a triangle with a bad material index, no triangles, an invalid light or camera,
+    /// or no light at all. Adds a camera that frames the whole mesh if there is none.
+    ///
+    /// # Errors
+    /// A [`SceneError`] naming `path` and the problem.
+    pub fn finish(&mut self, path: &Path) -> Result<(), SceneError> {
+        if let Some(i) = self.mesh.triangles.iter().flatten().find(|&&i| {
+            self.mesh
+                .positions
+                .get(i as usize)
+                .is_none_or(|p| !p.is_finite())
+        }) {
+            return Err(SceneError::new(
+                path,
+                format!("vertex {i} is missing or not finite (NaN or infinite coordinate)"),
+            ));
+        }
+        if let Some(&m) = self
+            .mesh
+            .materials
+            .iter()
+            .find(|&&m| m as usize >= self.materials.len())
+        {
+            return Err(SceneError::new(
+                path,
+                format!("triangle refers to material {m}, which does not exist"),
+            ));
+        }
+        let before = self.mesh.len();
+        let (lo, hi) = self.mesh.bounds();
+        let scale = (hi - lo).max_element().max(f32::MIN_POSITIVE);
+        let min_area2 = (scale * 1e-7).powi(4);
+        self.mesh
+            .retain_triangles(|m, t| m.face_cross(t).length_squared() > min_area2);
+        self.report.degenerate_triangles += before - self.mesh.len();
+        if self.mesh.is_empty() {
+            return Err(SceneError::new(
+                path,
+                if before == 0 {
+                    "the scene has no triangles".to_string()
+                } else {
+                    format!("all {before} triangles have zero area")
+                },
+            ));
+        }
+        if let Some(l) = self.lights.iter().find(|l| !l.is_valid()) {
+            return Err(SceneError::new(
+                path,
+                format!("invalid light (non-finite or negative value, or zero direction): {l:?}"),
+            ));
+        }
+        if self.lights.is_empty() && self.emissive_triangles().is_empty() {
+            return Err(SceneError::new(
+                path,
+                "the scene has no lights: add [[lights]] to a scene file, or give a material an emission",
+            ));
+        }
+        if !self.exposure.is_finite() || self.exposure <= 0.0 {
+            return Err(SceneError::new(path, "exposure must be a positive number"));
+        }
+        match &self.camera {
+            Some(c) if !c.is_valid() => {
+                return Err(SceneError::new(
+                    path,
+                    "invalid camera: position equals look_at, up is parallel to the view, or fov is not in (0, 180)",
+                ));
+            }
+            Some(_) => {}
+            None => self.camera = Some(self.framing_camera()),
+        }
+        Ok(())
+    }
+
+    /// A camera on the +z side of the bounds looking at their centre, far enough back that the
+    /// bounding sphere fits a 45-degree vertical field of view.
+    #[must_use]
+    pub fn framing_camera(&self) -> Camera {
+        let (c, r) = self.bounding_sphere();
+        let fov = 45.0f32;
+        let dist = r / (fov.to_radians() * 0.5).sin();
+        Camera {
+            position: c + Vec3::new(0.0, 0.0, dist),
+            look_at: c,
+            up: Vec3::Y,
+            fov_y_degrees: fov,
+        }
+    }
+
+    /// Centre and radius of a sphere enclosing the mesh (the sphere around its bounding box).
+    #[must_use]
+    pub fn bounding_sphere(&self) -> (Vec3, f32) {
+        let (lo, hi) = self.mesh.bounds();
+        let c = 0.5 * (lo + hi);
+        (c, (0.5 * (hi - lo).length()).max(1e-6))
+    }
+
+    /// Indices of the triangles whose material emits light (the area lights).
+    #[must_use]
+    pub fn emissive_triangles(&self) -> Vec<u32> {
+        (0..self.mesh.len() as u32)
+            .filter(|&t| {
+                self.materials
+                    .get(self.mesh.materials[t as usize] as usize)
+                    .is_some_and(Material::is_emissive)
+            })
+            .collect()
+    }
+
+    /// The material of triangle `t`.
+    #[inline]
+    #[must_use]
+    pub fn material_of(&self, t: usize) -> &Material {
+        &self.materials[self.mesh.materials[t] as usize]
+    }
+
+    /// The camera (present after [`Scene::finish`]; a framing camera otherwise).
+    #[must_use]
+    pub fn camera(&self) -> Camera {
+        self.camera.clone().unwrap_or_else(|| self.framing_camera())
+    }
+}

@@ -1,0 +1,172 @@
+//! The TOML scene file: a mesh file plus camera, lights and exposure.
+//!
+//! ```toml
+//! # Paths are relative to this file; "$LGH_SCENES/..." reads the LGH_SCENES folder.
+//! mesh = "$LGH_SCENES/sponza/sponza.obj"
+//! exposure = 1.0               # optional, multiplies radiance before tone mapping
+//!
+//! [camera]                     # optional: else the glTF camera, else one framing the mesh
+//! position = [-13.0, 2.0, -0.5]
+//! look_at = [10.0, 5.0, 0.5]
+//! up = [0.0, 1.0, 0.0]         # optional, default +y
+//! fov = 60.0                   # vertical, degrees
+//!
+//! [[lights]]
+//! type = "directional"         # point | spot | directional
+//! direction = [0.25, -1.0, 0.15]   # the way the light travels (normalised on load)
+//! irradiance = [8.0, 8.0, 8.0]     # W/m^2
+//!
+//! [[lights]]
+//! type = "point"
+//! position = [0.0, 5.0, 0.0]
+//! intensity = [10.0, 10.0, 10.0]   # W/sr
+//!
+//! [[lights]]
+//! type = "spot"
+//! position = [0.0, 5.0, 0.0]
+//! direction = [0.0, -1.0, 0.0]
+//! intensity = [50.0, 50.0, 50.0]
+//! inner_angle = 20.0           # degrees (half-angle of full intensity)
+//! outer_angle = 30.0           # degrees (half-angle where it reaches zero)
+//! ```
+//!
+//! The file's lights are added to the mesh's own (emissive materials, glTF punctual lights).
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use serde::Deserialize;
+
+use crate::{Camera, Light, Scene, SceneError};
+
+/// Name of the environment variable that points to the shared test scenes.
+pub const SCENES_ENV: &str = "LGH_SCENES";
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    mesh: String,
+    name: Option<String>,
+    exposure: Option<f32>,
+    camera: Option<CameraDesc>,
+    #[serde(default)]
+    lights: Vec<LightDesc>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraDesc {
+    position: [f32; 3],
+    look_at: [f32; 3],
+    up: Option<[f32; 3]>,
+    fov: f32,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+enum LightDesc {
+    Point {
+        position: [f32; 3],
+        intensity: [f32; 3],
+    },
+    Spot {
+        position: [f32; 3],
+        direction: [f32; 3],
+        intensity: [f32; 3],
+        inner_angle: f32,
+        outer_angle: f32,
+    },
+    Directional {
+        direction: [f32; 3],
+        irradiance: [f32; 3],
+    },
+}
+
+impl LightDesc {
+    fn to_light(&self) -> Light {
+        match *self {
+            LightDesc::Point {
+                position,
+                intensity,
+            } => Light::Point {
+                position: position.into(),
+                intensity: intensity.into(),
+            },
+            LightDesc::Spot {
+                position,
+                direction,
+                intensity,
+                inner_angle,
+                outer_angle,
+            } => Light::Spot {
+                position: position.into(),
+                direction: Vec3::from(direction).normalize_or_zero(),
+                intensity: intensity.into(),
+                cos_inner: inner_angle.max(0.0).min(outer_angle).to_radians().cos(),
+                cos_outer: outer_angle.clamp(0.0, 180.0).to_radians().cos(),
+            },
+            LightDesc::Directional {
+                direction,
+                irradiance,
+            } => Light::Directional {
+                direction: Vec3::from(direction).normalize_or_zero(),
+                irradiance: irradiance.into(),
+            },
+        }
+    }
+}
+
+/// Resolves the `mesh` entry of a scene file: `$LGH_SCENES/...` (or `${LGH_SCENES}/...`)
+/// against that variable, anything else against the scene file's folder.
+///
+/// # Errors
+/// The path names `LGH_SCENES` and the variable is not set.
+pub fn resolve_mesh_path(scene_file: &Path, mesh: &str) -> Result<PathBuf, SceneError> {
+    for prefix in ["$LGH_SCENES", "${LGH_SCENES}"] {
+        if let Some(rest) = mesh.strip_prefix(prefix) {
+            let root = std::env::var_os(SCENES_ENV).ok_or_else(|| {
+                SceneError::new(
+                    scene_file,
+                    format!("mesh \"{mesh}\" needs the {SCENES_ENV} environment variable (the folder of the shared scenes), which is not set"),
+                )
+            })?;
+            return Ok(PathBuf::from(root).join(rest.trim_start_matches(['/', '\\'])));
+        }
+    }
+    Ok(scene_file.parent().unwrap_or(Path::new(".")).join(mesh))
+}
+
+/// Loads a TOML scene file and the mesh it names, and finishes the scene.
+///
+/// # Errors
+/// The file cannot be read or parsed (the message gives the TOML line), the mesh cannot be
+/// loaded, or the finished scene is invalid (see [`Scene::finish`]).
+pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SceneError::new(path, format!("cannot read scene file: {e}")))?;
+    let desc: SceneFile = toml::from_str(&text)
+        .map_err(|e| SceneError::new(path, format!("invalid scene file: {}", e.to_string().trim())))?;
+    let mesh_path = resolve_mesh_path(path, &desc.mesh)?;
+    let mut scene = crate::load_mesh_file(&mesh_path)?;
+    if let Some(name) = desc.name {
+        scene.name = name;
+    } else if let Some(stem) = path.file_stem() {
+        scene.name = stem.to_string_lossy().into_owned();
+    }
+    if let Some(e) = desc.exposure {
+        scene.exposure = e;
+    }
+    if let Some(c) = desc.camera {
+        scene.camera = Some(Camera {
+            position: c.position.into(),
+            look_at: c.look_at.into(),
+            up: c.up.map_or(Vec3::Y, Vec3::from),
+            fov_y_degrees: c.fov,
+        });
+    }
+    scene
+        .lights
+        .extend(desc.lights.iter().map(LightDesc::to_light));
+    scene.finish(path)?;
+    Ok(scene)
+}
