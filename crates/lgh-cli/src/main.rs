@@ -1,1 +1,65 @@
-fn main() {}
+//! `lgh`: render scenes with many lights, compare images, measure speed.
+//!
+//! Every error is one line on stderr naming the file or flag and the problem, with exit code 2.
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+mod bench_cmd;
+mod diff_cmd;
+mod progress_bar;
+mod render_cmd;
+mod scene_arg;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Real-time-style global illumination with many lights, on the CPU: lighting grid hierarchy
+/// (Lin & Yuksel 2019), stochastic light culling (Tokuyoshi & Harada 2016) and a brute-force
+/// reference.
+#[derive(Debug, Parser)]
+#[command(name = "lgh", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Render a scene (the built-in Cornell box if none is given) to PNG or EXR.
+    Render(render_cmd::RenderArgs),
+    /// Compare image A against reference B (EXR or PNG, same size).
+    Diff(diff_cmd::DiffArgs),
+    /// Measure performance.
+    Bench(bench_cmd::BenchArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(a) => render_cmd::run(&a),
+        Command::Diff(a) => diff_cmd::run(&a),
+        Command::Bench(a) => bench_cmd::run(&a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// Sets the number of worker threads (0 = one per core).
+fn set_threads(threads: usize) -> anyhow::Result<usize> {
+    if threads > 0 {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global()
+            .map_err(|e| anyhow::anyhow!("--threads {threads}: {e}"))?;
+    }
+    Ok(rayon::current_num_threads())
+}

@@ -13,6 +13,10 @@
 //! Everything here is plain data plus functions, so that other engines can use it with their
 //! own ray tracer.
 #![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
 
 pub mod color;
 pub mod rng;

@@ -19,6 +19,10 @@
 //! Every pass is parallel (rayon) and deterministic: the same seed gives the same image
 //! whatever the thread count.
 #![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
 
 pub mod accel;
 pub mod brute;

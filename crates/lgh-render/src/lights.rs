@@ -180,13 +180,15 @@ impl LightSet {
                 dir: uniform_sphere(u),
                 flux: *intensity * (4.0 * PI),
             },
-            Some(l @ Light::Spot {
-                position,
-                direction,
-                intensity,
-                cos_outer,
-                ..
-            }) => {
+            Some(
+                l @ Light::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    cos_outer,
+                    ..
+                },
+            ) => {
                 let dir = uniform_cone(*direction, *cos_outer, u);
                 EmittedRay {
                     origin: *position,

@@ -52,6 +52,9 @@ mod tests {
             assert!((0.0..=1.0).contains(&y) && y >= prev);
             prev = y;
         }
-        assert_eq!(tonemap_to_srgb8(&[Vec3::new(f32::NAN, -1.0, 1e9)], 1.0), vec![0, 0, 255]);
+        assert_eq!(
+            tonemap_to_srgb8(&[Vec3::new(f32::NAN, -1.0, 1e9)], 1.0),
+            vec![0, 0, 255]
+        );
     }
 }

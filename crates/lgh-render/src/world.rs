@@ -95,11 +95,7 @@ impl World {
             geo_normal,
             normal,
             albedo: material.albedo_at(&self.scene.textures, uv),
-            emission: if front {
-                material.emission
-            } else {
-                Vec3::ZERO
-            },
+            emission: if front { material.emission } else { Vec3::ZERO },
             triangle: hit.triangle,
         }
     }

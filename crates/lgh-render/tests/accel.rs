@@ -24,10 +24,9 @@ fn brute_closest(mesh: &Mesh, o: Vec3, d: Vec3, t_max: f32) -> Option<(f32, usiz
         let q = s.cross(e1);
         let v = d.dot(q) * inv;
         let tt = e2.dot(q) * inv;
-        if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && tt > 0.0 && tt < t_max {
-            if best.is_none_or(|(bt, _)| tt < bt) {
-                best = Some((tt, t));
-            }
+        let inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0 && tt > 0.0 && tt < t_max;
+        if inside && best.is_none_or(|(bt, _)| tt < bt) {
+            best = Some((tt, t));
         }
     }
     best

@@ -24,8 +24,8 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     if !path.is_file() {
         return Err(SceneError::new(path, "file not found"));
     }
-    let (doc, buffers, images) = gltf::import(path)
-        .map_err(|e| SceneError::new(path, format!("cannot load glTF: {e}")))?;
+    let (doc, buffers, images) =
+        gltf::import(path).map_err(|e| SceneError::new(path, format!("cannot load glTF: {e}")))?;
     let mut scene = Scene::new(file_stem(path));
 
     let mut texture_of_image = vec![None; images.len()];
@@ -46,7 +46,11 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let [r, g, b, _] = pbr.base_color_factor();
         let albedo_texture = pbr
             .base_color_texture()
-            .and_then(|info| texture_of_image.get(info.texture().source().index()).copied())
+            .and_then(|info| {
+                texture_of_image
+                    .get(info.texture().source().index())
+                    .copied()
+            })
             .flatten();
         let strength = m.emissive_strength().unwrap_or(1.0);
         scene.materials.push(Material {
@@ -63,8 +67,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         .default_scene()
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| SceneError::new(path, "the glTF file has no scene"))?;
-    let mut stack: Vec<(gltf::Node, Mat4)> =
-        gscene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    let mut stack: Vec<(gltf::Node, Mat4)> = gscene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     let mut skipped_modes = 0usize;
     while let Some((node, parent)) = stack.pop() {
         let m = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
@@ -91,10 +94,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
                     Some(it) => it.into_u32().collect(),
                     None => (0..positions.len() as u32).collect(),
                 };
-                let material = p
-                    .material()
-                    .index()
-                    .map_or(default_material, |i| i as u32);
+                let material = p.material().index().map_or(default_material, |i| i as u32);
                 let prim = Primitive {
                     positions,
                     normals,

@@ -15,6 +15,10 @@
 //! [`load`] opens any supported file by its extension. Every loader returns a
 //! [`SceneError`] naming the file and the problem; none panics on bad input.
 #![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
 
 pub mod camera;
 pub mod cornell;

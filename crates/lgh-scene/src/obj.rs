@@ -25,7 +25,6 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     let (models, materials) = tobj::load_obj(path, &opts)
         .map_err(|e| SceneError::new(path, format!("cannot parse OBJ: {e}")))?;
@@ -34,10 +33,9 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let obj_materials = match materials {
         Ok(m) => m,
         Err(e) => {
-            scene
-                .report
-                .warnings
-                .push(format!("material library not loaded ({e}); using a grey default"));
+            scene.report.warnings.push(format!(
+                "material library not loaded ({e}); using a grey default"
+            ));
             Vec::new()
         }
     };

@@ -144,8 +144,18 @@ pub fn resolve_mesh_path(scene_file: &Path, mesh: &str) -> Result<PathBuf, Scene
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| SceneError::new(path, format!("cannot read scene file: {e}")))?;
-    let desc: SceneFile = toml::from_str(&text)
-        .map_err(|e| SceneError::new(path, format!("invalid scene file: {}", e.to_string().trim())))?;
+    let desc: SceneFile = toml::from_str(&text).map_err(|e| {
+        let place = e.span().map_or_else(String::new, |span| {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+            format!(" at line {line}, column {column}")
+        });
+        SceneError::new(
+            path,
+            format!("invalid scene file{place}: {}", e.message().trim()),
+        )
+    })?;
     let mesh_path = resolve_mesh_path(path, &desc.mesh)?;
     let mut scene = crate::load_mesh_file(&mesh_path)?;
     if let Some(name) = desc.name {

@@ -84,7 +84,11 @@ mod tests {
     #[test]
     fn constant_texture_samples_constant_everywhere() {
         let t = Texture::from_srgb8(2, 2, 4, &[255u8; 16]).unwrap();
-        for uv in [Vec2::new(0.0, 0.0), Vec2::new(0.99, 0.3), Vec2::new(-3.2, 7.5)] {
+        for uv in [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(0.99, 0.3),
+            Vec2::new(-3.2, 7.5),
+        ] {
             assert!((t.sample(uv) - Vec3::ONE).abs().max_element() < 1e-6);
         }
         assert!(Texture::from_srgb8(0, 2, 4, &[]).is_none());

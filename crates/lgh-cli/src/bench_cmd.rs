@@ -1,0 +1,81 @@
+//! `lgh bench`: performance measurements.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Result;
+use clap::{Args, Subcommand};
+use lgh_render::World;
+use lgh_render::raybench::bench_rays;
+
+use crate::scene_arg::load_scene;
+
+/// Measure performance.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    pub what: BenchWhat,
+}
+
+/// What to measure.
+#[derive(Debug, Subcommand)]
+pub enum BenchWhat {
+    /// Rays per second on a scene: primary, shadow (any-hit) and bounce (closest-hit) rays,
+    /// with the BVH build time.
+    Rays(RaysArgs),
+}
+
+/// Arguments of `lgh bench rays`.
+#[derive(Debug, Args)]
+pub struct RaysArgs {
+    /// Scene file (.toml, .gltf, .glb, .obj). Default: the built-in Cornell box.
+    pub scene: Option<PathBuf>,
+    /// Rays of each kind.
+    #[arg(long, default_value_t = 1_000_000)]
+    pub rays: usize,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: &BenchArgs) -> Result<()> {
+    match &args.what {
+        BenchWhat::Rays(a) => rays(a),
+    }
+}
+
+fn rays(args: &RaysArgs) -> Result<()> {
+    let threads = crate::set_threads(args.threads)?;
+    let scene = load_scene(args.scene.as_deref())?;
+    let name = scene.name.clone();
+    let t = Instant::now();
+    let world = World::new(scene);
+    let build_ms = t.elapsed().as_secs_f64() * 1e3;
+    let r = bench_rays(&world, args.rays.max(1), build_ms);
+    if args.json {
+        let v = serde_json::json!({
+            "scene": name,
+            "threads": threads,
+            "triangles": r.triangles,
+            "rays": r.rays,
+            "bvh_build_ms": r.bvh_build_ms,
+            "primary_rays_per_s": r.primary_rays_per_s,
+            "shadow_rays_per_s": r.shadow_rays_per_s,
+            "bounce_rays_per_s": r.bounce_rays_per_s,
+        });
+        println!("{v}");
+    } else {
+        println!(
+            "scene       {name} ({} triangles, {threads} threads)",
+            r.triangles
+        );
+        println!("bvh build   {:.1} ms", r.bvh_build_ms);
+        println!("primary     {:.2} Mrays/s", r.primary_rays_per_s / 1e6);
+        println!("shadow      {:.2} Mrays/s", r.shadow_rays_per_s / 1e6);
+        println!("bounce      {:.2} Mrays/s", r.bounce_rays_per_s / 1e6);
+    }
+    Ok(())
+}

@@ -1,0 +1,50 @@
+//! `lgh diff`: image metrics against a reference.
+
+use std::path::PathBuf;
+
+use anyhow::{Result, anyhow};
+use clap::Args;
+use lgh_render::Image;
+use lgh_render::metrics::diff;
+
+/// Compare image A against the reference B.
+#[derive(Debug, Args)]
+pub struct DiffArgs {
+    /// The image to judge (.exr linear, or .png whose sRGB curve is undone).
+    pub a: PathBuf,
+    /// The reference image, same size.
+    pub b: PathBuf,
+    /// Print one JSON object {rmse, rel_rmse, rel_bias, max_abs} instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: &DiffArgs) -> Result<()> {
+    let a = Image::load(&args.a)?;
+    let b = Image::load(&args.b)?;
+    let m =
+        diff(&a, &b).map_err(|e| anyhow!("{} vs {}: {e}", args.a.display(), args.b.display()))?;
+    if args.json {
+        let v = serde_json::json!({
+            "rmse": m.rmse,
+            "rel_rmse": finite_or_null(m.rel_rmse),
+            "rel_bias": finite_or_null(m.rel_bias),
+            "max_abs": m.max_abs,
+        });
+        println!("{v}");
+    } else {
+        println!("rmse      {:.6}", m.rmse);
+        println!("rel_rmse  {:.6}", m.rel_rmse);
+        println!("rel_bias  {:+.6}", m.rel_bias);
+        println!("max_abs   {:.6}", m.max_abs);
+    }
+    Ok(())
+}
+
+fn finite_or_null(x: f64) -> serde_json::Value {
+    if x.is_finite() {
+        serde_json::json!(x)
+    } else {
+        serde_json::Value::Null
+    }
+}

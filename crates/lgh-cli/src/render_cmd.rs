@@ -1,0 +1,205 @@
+//! `lgh render`.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, ValueEnum};
+use lgh_render::image::check_output_path;
+use lgh_render::{Component, Method, RenderSettings, World, render_frame};
+
+use crate::progress_bar::Bars;
+use crate::scene_arg::load_scene;
+
+/// Indirect-lighting methods.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum MethodArg {
+    /// Every pixel sums every VPL with an exact shadow ray (the reference).
+    Brute,
+    /// Every pixel sums every VPL without shadow rays.
+    BruteUnshadowed,
+}
+
+/// Parts of the radiance to write.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum ComponentArg {
+    /// Emission + direct + indirect light.
+    All,
+    /// Emission + direct light only.
+    Direct,
+    /// Indirect light (from the VPLs) only.
+    Indirect,
+}
+
+/// Render a scene to an image.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Scene file: .toml (scene file), .gltf, .glb or .obj. Default: the built-in Cornell box.
+    pub scene: Option<PathBuf>,
+    /// How the indirect light is computed.
+    #[arg(long, value_enum, default_value = "brute")]
+    pub method: MethodArg,
+    /// Number of virtual point lights (VPLs) to generate by light tracing.
+    #[arg(long, default_value_t = 10_000)]
+    pub vpls: usize,
+    /// Maximum VPLs per light path, i.e. indirect bounces represented (1 = one bounce).
+    #[arg(long, default_value_t = 3)]
+    pub bounces: u32,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x360", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Seed of all random choices; the same seed gives the same image on any thread count.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output image: .png (exposure, ACES filmic tone map, sRGB) or .exr (linear radiance).
+    #[arg(long, short, default_value = "lgh.png")]
+    pub out: PathBuf,
+    /// Which part of the radiance to write.
+    #[arg(long, value_enum, default_value = "all")]
+    pub component: ComponentArg,
+    /// Write statistics (sizes, counts, per-pass timings in ms) as JSON to this file.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+    /// Shadow-ray samples per pixel for area lights (emissive triangles) in the direct pass.
+    #[arg(long, default_value_t = 16)]
+    pub area_samples: u32,
+    /// Exposure multiplier for PNG output (default: the scene file's, else 1).
+    #[arg(long)]
+    pub exposure: Option<f32>,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// No progress bars and no summary.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Parses `WIDTHxHEIGHT` with both sides positive.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT (e.g. 640x360)"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}': width is not a number"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}': height is not a number"))?;
+    if w == 0 || h == 0 {
+        return Err(format!("'{s}': width and height must be at least 1"));
+    }
+    if u64::from(w) * u64::from(h) > 1 << 28 {
+        return Err(format!("'{s}': image too large"));
+    }
+    Ok((w, h))
+}
+
+pub fn run(args: &RenderArgs) -> Result<()> {
+    check_output_path(&args.out)?;
+    if let Some(stats) = &args.stats
+        && let Some(dir) = stats.parent()
+        && !dir.as_os_str().is_empty()
+        && !dir.is_dir()
+    {
+        bail!(
+            "{}: output folder {} does not exist",
+            stats.display(),
+            dir.display()
+        );
+    }
+    if let Some(e) = args.exposure
+        && (!e.is_finite() || e <= 0.0)
+    {
+        bail!("--exposure {e}: must be a positive number");
+    }
+    let threads = crate::set_threads(args.threads)?;
+    let start = Instant::now();
+    let scene = load_scene(args.scene.as_deref())?;
+    let load_ms = start.elapsed().as_secs_f64() * 1e3;
+    let exposure = args.exposure.unwrap_or(scene.exposure);
+    let scene_name = scene.name.clone();
+
+    let t = Instant::now();
+    let world = World::new(scene);
+    let bvh_ms = t.elapsed().as_secs_f64() * 1e3;
+
+    let settings = RenderSettings {
+        width: args.size.0,
+        height: args.size.1,
+        vpls: args.vpls,
+        bounces: args.bounces,
+        seed: args.seed,
+        area_samples: args.area_samples,
+        method: match args.method {
+            MethodArg::Brute => Method::Brute,
+            MethodArg::BruteUnshadowed => Method::BruteUnshadowed,
+        },
+        component: match args.component {
+            ComponentArg::All => Component::All,
+            ComponentArg::Direct => Component::Direct,
+            ComponentArg::Indirect => Component::Indirect,
+        },
+        ..RenderSettings::default()
+    };
+    let bars = Bars::new(args.quiet);
+    let frame = render_frame(&world, &settings, &bars);
+    frame.image.save(&args.out, exposure)?;
+
+    let mut timings = serde_json::Map::new();
+    timings.insert("scene_load".into(), load_ms.into());
+    timings.insert("bvh_build".into(), bvh_ms.into());
+    for (name, ms) in &frame.timings.0 {
+        let ms = if name == "total" { ms + bvh_ms } else { *ms };
+        timings.insert(name.clone(), ms.into());
+    }
+    if let Some(path) = &args.stats {
+        let stats = serde_json::json!({
+            "scene": scene_name,
+            "width": settings.width,
+            "height": settings.height,
+            "vpls": frame.vpls.vpls.len(),
+            "vpls_requested": settings.vpls,
+            "light_paths": frame.vpls.paths,
+            "bounces": settings.bounces,
+            "method": settings.method.name(),
+            "seed": settings.seed,
+            "threads": threads,
+            "triangles": world.accel.len(),
+            "timings_ms": timings,
+        });
+        let text = serde_json::to_string_pretty(&stats)?;
+        std::fs::write(path, text + "\n")
+            .with_context(|| format!("{}: cannot write statistics", path.display()))?;
+    }
+    if !args.quiet {
+        eprintln!(
+            "{}: {}x{}, {} triangles, {} VPLs from {} light paths, {} in {:.0} ms ({} threads) -> {}",
+            scene_name,
+            settings.width,
+            settings.height,
+            world.accel.len(),
+            frame.vpls.vpls.len(),
+            frame.vpls.paths,
+            settings.method.name(),
+            frame.timings.get("total").unwrap_or(0.0) + bvh_ms,
+            threads,
+            args.out.display()
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_size;
+
+    #[test]
+    fn sizes() {
+        assert_eq!(parse_size("640x360"), Ok((640, 360)));
+        assert!(parse_size("0x10").is_err());
+        assert!(parse_size("640").is_err());
+        assert!(parse_size("ax3").is_err());
+    }
+}

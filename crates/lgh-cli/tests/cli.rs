@@ -1,0 +1,214 @@
+//! The command line as a user meets it: successful renders and every kind of bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn lgh(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lgh"))
+        .args(args)
+        .env_remove("LGH_SCENES")
+        .output()
+        .unwrap()
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("lgh-cli-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Fails with exit code 2, one line on stderr that contains every `needles`, and no output.
+fn assert_error(out: &Output, needles: &[&str]) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "expected '{n}' in: {err}");
+    }
+}
+
+#[test]
+fn renders_the_default_scene_to_png_and_exr_with_stats_and_diffs_them() {
+    let d = temp_dir("ok");
+    let png = d.join("c.png");
+    let exr = d.join("c.exr");
+    let stats = d.join("c.json");
+    let common = ["--size", "40x24", "--vpls", "200", "--quiet"];
+    let out = lgh(&[
+        &["render", "--out", s(&png), "--stats", s(&stats)][..],
+        &common,
+    ]
+    .concat());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = lgh(&[&["render", "--out", s(&exr)][..], &common].concat());
+    assert!(out.status.success());
+    assert!(png.is_file() && exr.is_file());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    for key in [
+        "scene", "width", "height", "vpls", "method", "seed", "threads",
+    ] {
+        assert!(json.get(key).is_some(), "missing {key}");
+    }
+    for key in [
+        "bvh_build",
+        "gbuffer",
+        "vpl_generation",
+        "direct",
+        "indirect",
+        "total",
+    ] {
+        assert!(json["timings_ms"][key].is_f64(), "missing timings_ms.{key}");
+    }
+    let out = lgh(&["diff", s(&exr), s(&exr), "--json"]);
+    assert!(out.status.success());
+    let m: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(m["rmse"], 0.0);
+    assert_eq!(m["rel_bias"], 0.0);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn bad_inputs_give_one_clear_error_and_exit_code_2() {
+    let d = temp_dir("bad");
+    let out_png = d.join("o.png");
+    let o = s(&out_png);
+    let w = |name: &str, text: &str| {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    // Missing scene file.
+    assert_error(
+        &lgh(&["render", "/no/such/scene.obj", "--out", o]),
+        &["/no/such/scene.obj", "not found"],
+    );
+    // Malformed TOML.
+    let bad_toml = w("bad.toml", "mesh = [1, 2\n");
+    assert_error(
+        &lgh(&["render", s(&bad_toml), "--out", o]),
+        &["bad.toml", "invalid scene file"],
+    );
+    // Unknown key in a scene file.
+    let unknown = w("unknown.toml", "mesh = \"x.obj\"\nfoo = 1\n");
+    assert_error(
+        &lgh(&["render", s(&unknown), "--out", o]),
+        &["unknown.toml", "foo"],
+    );
+    // A scene file whose mesh does not exist.
+    let missing_mesh = w("missing_mesh.toml", "mesh = \"nothing.obj\"\n");
+    assert_error(
+        &lgh(&["render", s(&missing_mesh), "--out", o]),
+        &["nothing.obj", "not found"],
+    );
+    // $LGH_SCENES without the variable.
+    let env_mesh = w("env.toml", "mesh = \"$LGH_SCENES/sponza/sponza.obj\"\n");
+    assert_error(
+        &lgh(&["render", s(&env_mesh), "--out", o]),
+        &["env.toml", "LGH_SCENES"],
+    );
+    // Malformed OBJ.
+    let bad_obj = w("bad.obj", "v 0 0 0\nv 1 0 0\nf 1 2 7\n");
+    assert_error(&lgh(&["render", s(&bad_obj), "--out", o]), &["bad.obj"]);
+    // Malformed glTF.
+    let bad_gltf = w("bad.gltf", "{ not json");
+    assert_error(
+        &lgh(&["render", s(&bad_gltf), "--out", o]),
+        &["bad.gltf", "glTF"],
+    );
+    // No lights.
+    let dark = w("dark.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    assert_error(
+        &lgh(&["render", s(&dark), "--out", o]),
+        &["dark.obj", "no lights"],
+    );
+    // No triangles.
+    let empty = w("empty.obj", "# nothing\n");
+    assert_error(
+        &lgh(&["render", s(&empty), "--out", o]),
+        &["empty.obj", "no triangles"],
+    );
+    // Only degenerate triangles.
+    let degenerate = w("degenerate.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    assert_error(
+        &lgh(&["render", s(&degenerate), "--out", o]),
+        &["degenerate.obj", "zero area"],
+    );
+    // Non-finite vertex.
+    let nan = w("nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
+    assert_error(&lgh(&["render", s(&nan), "--out", o]), &["nan.obj"]);
+    // Unknown flag, bad size, zero size.
+    assert_error(&lgh(&["render", "--frobnicate"]), &["--frobnicate"]);
+    assert_error(&lgh(&["render", "--size", "0x10", "--out", o]), &["0x10"]);
+    assert_error(&lgh(&["render", "--size", "big", "--out", o]), &["big"]);
+    // Output in a missing folder, or with an unknown extension.
+    let deep = d.join("missing/dir/o.png");
+    assert_error(&lgh(&["render", "--out", s(&deep)]), &["does not exist"]);
+    assert_error(
+        &lgh(&["render", "--out", s(&d.join("o.jpg"))]),
+        &["o.jpg", "extension"],
+    );
+    // diff of missing files and of images of different sizes.
+    assert_error(
+        &lgh(&["diff", "/no/a.exr", "/no/b.exr"]),
+        &["/no/a.exr", "not found"],
+    );
+    // Nothing was written by any failed command.
+    assert!(!out_png.exists());
+    assert!(!deep.exists());
+    let leftovers: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains("partial"))
+        .collect();
+    assert!(leftovers.is_empty());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn diff_rejects_images_of_different_sizes() {
+    let d = temp_dir("sizes");
+    let a = d.join("a.exr");
+    let b = d.join("b.exr");
+    for (p, size) in [(&a, "20x10"), (&b, "10x10")] {
+        let out = lgh(&[
+            "render",
+            "--size",
+            size,
+            "--vpls",
+            "50",
+            "--out",
+            s(p),
+            "-q",
+        ]);
+        assert!(out.status.success());
+    }
+    assert_error(&lgh(&["diff", s(&a), s(&b)]), &["differ in size"]);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn help_explains_every_render_flag() {
+    let out = lgh(&["render", "--help"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    for flag in [
+        "--method",
+        "--vpls",
+        "--bounces",
+        "--size",
+        "--seed",
+        "--out",
+        "--component",
+        "--stats",
+    ] {
+        assert!(text.contains(flag), "{flag} missing from --help");
+    }
+}
