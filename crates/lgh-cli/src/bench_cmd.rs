@@ -23,6 +23,9 @@ pub enum BenchWhat {
     /// Rays per second on a scene: primary, shadow (any-hit) and bounce (closest-hit) rays,
     /// with the BVH build time.
     Rays(RaysArgs),
+    /// Lighting grid hierarchy construction (LGH paper Table 1): per-step times, levels and
+    /// lights per level, for the paper's gather-from-S1 method and the all-scatter variant.
+    Build(BuildArgs),
 }
 
 /// Arguments of `lgh bench rays`.
@@ -44,8 +47,11 @@ pub struct RaysArgs {
 pub fn run(args: &BenchArgs) -> Result<()> {
     match &args.what {
         BenchWhat::Rays(a) => rays(a),
+        BenchWhat::Build(a) => crate::bench_build::run(a),
     }
 }
+
+pub use crate::bench_build::BuildArgs;
 
 fn rays(args: &RaysArgs) -> Result<()> {
     let threads = crate::set_threads(args.threads)?;

@@ -7,6 +7,7 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+mod bench_build;
 mod bench_cmd;
 mod diff_cmd;
 mod progress_bar;

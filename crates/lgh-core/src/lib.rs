@@ -9,6 +9,8 @@
 //! | [`sampling`] | warps (cosine hemisphere, triangle, raised cosine) and a discrete distribution | - |
 //! | [`color`] | luminance and RGB helpers | - |
 //! | [`vpl`] | virtual point lights, stored structure-of-arrays | Keller 1997; LGH 2019 section 3 |
+//! | [`lighting_grid`] | the lighting grid hierarchy, built in parallel | LGH 2019 section 3.1 |
+//! | [`blending`] | blending functions B_l(d), radii r_l = alpha h_l | LGH 2019 section 2.2, Fig. 2 |
 //!
 //! Everything here is plain data plus functions, so that other engines can use it with their
 //! own ray tracer.
@@ -18,7 +20,9 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+pub mod blending;
 pub mod color;
+pub mod lighting_grid;
 pub mod rng;
 pub mod sampling;
 pub mod vpl;

@@ -1,0 +1,191 @@
+//! `lgh bench build`: the LGH paper's Table 1 on this machine.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use anyhow::{Result, bail};
+use clap::Args;
+use glam::Vec3;
+use lgh_core::lighting_grid::synthetic::lights_on_surfaces;
+use lgh_core::lighting_grid::{Construction, InputLights, LevelCount, LightingGrid};
+use lgh_render::World;
+use lgh_render::vpl_gen::generate_vpls;
+
+use crate::scene_arg::load_scene;
+
+/// Arguments of `lgh bench build`.
+#[derive(Debug, Args)]
+pub struct BuildArgs {
+    /// Numbers of input lights, comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "1000,10000,100000,1000000"
+    )]
+    pub lights: Vec<usize>,
+    /// Use the VPLs of this scene (light tracing, 3 bounces) instead of the synthetic set:
+    /// lights on the faces of a 10 x 4 x 8 room and of 24 random boxes in it.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Number of levels: `auto` (largest l_max with |S1| < N/2) or a number 1..=10.
+    #[arg(long, default_value = "auto")]
+    pub levels: String,
+    /// Timed runs per configuration; the report gives medians.
+    #[arg(long, default_value_t = 7)]
+    pub runs: usize,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Print one JSON object {runs: [...]} instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+struct Input {
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    intensity: Vec<Vec3>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() { 0.0 } else { v[v.len() / 2] }
+}
+
+/// Peak resident memory since the last reset, in bytes (Linux; `None` elsewhere).
+fn peak_rss_reset() -> Option<u64> {
+    if std::env::var_os("LGH_NO_RSS").is_some() {
+        return None;
+    }
+    std::fs::write("/proc/self/clear_refs", "5").ok()?;
+    rss("VmRSS:")
+}
+
+fn rss(key: &str) -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with(key))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+pub fn run(args: &BuildArgs) -> Result<()> {
+    let threads = crate::set_threads(args.threads)?;
+    let levels = match args.levels.as_str() {
+        "auto" => LevelCount::Auto,
+        s => match s.parse::<u32>() {
+            Ok(l) if (1..=10).contains(&l) => LevelCount::Fixed(l),
+            _ => bail!("--levels {s}: expected 'auto' or a number from 1 to 10"),
+        },
+    };
+    if args.lights.is_empty() || args.lights.contains(&0) {
+        bail!("--lights: give one or more positive counts");
+    }
+    let world = match &args.scene {
+        Some(p) => Some(World::new(load_scene(Some(p))?)),
+        None => None,
+    };
+    let mut rows = Vec::new();
+    for &n in &args.lights {
+        let input = match &world {
+            Some(w) => {
+                let set = generate_vpls(w, n, 3, 0);
+                Input {
+                    intensity: set.vpls.flux.clone(),
+                    positions: set.vpls.positions,
+                    normals: set.vpls.normals,
+                }
+            }
+            None => {
+                let s = lights_on_surfaces(n, 1);
+                Input {
+                    positions: s.positions,
+                    normals: s.normals,
+                    intensity: s.intensity,
+                }
+            }
+        };
+        let lights = InputLights {
+            positions: &input.positions,
+            intensity: &input.intensity,
+            normals: Some(&input.normals),
+        };
+        for construction in [Construction::GatherFromS1, Construction::ScatterAll] {
+            let mut steps: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+            let mut order: Vec<String> = Vec::new();
+            let mut totals = Vec::new();
+            let mut peak = 0u64;
+            let mut last = None;
+            for _ in 0..args.runs.max(1) {
+                let base = peak_rss_reset();
+                let (grid, t) = LightingGrid::build(&lights, levels, construction)?;
+                if let (Some(b), Some(p)) = (base, rss("VmHWM:")) {
+                    peak = peak.max(p.saturating_sub(b));
+                }
+                for (name, ms) in &t.0 {
+                    if !steps.contains_key(name) {
+                        order.push(name.clone());
+                    }
+                    steps.entry(name.clone()).or_default().push(*ms);
+                }
+                totals.push(t.total());
+                last = Some(grid);
+            }
+            let Some(grid) = last else { continue };
+            let steps_ms: Vec<(String, f64)> = order
+                .iter()
+                .map(|k| (k.clone(), median(steps.get(k).cloned().unwrap_or_default())))
+                .collect();
+            rows.push(serde_json::json!({
+                "lights": lights.positions.len(),
+                "variant": construction.name(),
+                "levels": grid.l_max(),
+                "lights_per_level": grid.lights_per_level(),
+                "steps_ms": steps_ms.iter().map(|(k, v)| (k.clone(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),
+                "step_order": order,
+                "total_ms": median(totals),
+                "peak_bytes_per_light": peak as f64 / lights.positions.len() as f64,
+            }));
+        }
+    }
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({ "threads": threads, "runs": rows })
+        );
+        return Ok(());
+    }
+    println!(
+        "Lighting grid hierarchy construction, median of {} runs, {threads} threads{}",
+        args.runs.max(1),
+        args.scene
+            .as_ref()
+            .map_or(" (synthetic lights on surfaces)".into(), |p| format!(
+                " (VPLs of {})",
+                p.display()
+            ))
+    );
+    for r in &rows {
+        println!(
+            "\n{} lights, {} variant: {} levels, lights per level {}, peak {:.0} bytes/light",
+            r["lights"],
+            r["variant"],
+            r["levels"],
+            r["lights_per_level"],
+            r["peak_bytes_per_light"]
+        );
+        if let Some(order) = r["step_order"].as_array() {
+            for k in order.iter().filter_map(|k| k.as_str()) {
+                println!(
+                    "  {k:<12} {:>10.3} ms",
+                    r["steps_ms"][k].as_f64().unwrap_or(0.0)
+                );
+            }
+        }
+        println!(
+            "  {:<12} {:>10.3} ms",
+            "total",
+            r["total_ms"].as_f64().unwrap_or(0.0)
+        );
+    }
+    Ok(())
+}

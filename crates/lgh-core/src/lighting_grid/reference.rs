@@ -1,0 +1,82 @@
+//! A plain single-threaded reference builder, to test the parallel one against.
+//!
+//! It follows the definitions directly: every source adds its 8 trilinear weights into an
+//! ordered map from vertex to sums, level by level. It shares only the final formulas (sums to
+//! grid light, compaction, merge) with the parallel builder.
+
+use std::collections::BTreeMap;
+
+use glam::UVec3;
+
+use super::splat::{Accum, Level, Sources, corner_weight, level_from_sums, locate};
+use super::{Construction, GridError, GridGeometry, InputLights, LightingGrid};
+
+fn splat_reference(src: &Sources, geom: &GridGeometry, level: u32) -> Level {
+    let h = geom.cell_size(level);
+    let r = geom.cells_per_axis(level);
+    let inv_h2 = 1.0 / (h * h);
+    // Keyed by (z, y, x) so that iteration gives the parallel builder's vertex order.
+    let mut sums: BTreeMap<(u32, u32, u32), Accum> = BTreeMap::new();
+    for s in 0..src.positions.len() {
+        let (c, f) = locate(src.positions[s], geom.origin, h, r);
+        for dz in 0..2 {
+            for dy in 0..2 {
+                for dx in 0..2 {
+                    let d = UVec3::new(dx, dy, dz);
+                    let w = corner_weight(f, d);
+                    if w > 0.0 {
+                        let v = c + d;
+                        sums.entry((v.z, v.y, v.x)).or_default().add_source(
+                            src,
+                            s,
+                            w,
+                            f - d.as_vec3(),
+                            inv_h2,
+                        );
+                    }
+                }
+            }
+        }
+    }
+    level_from_sums(
+        sums.into_iter()
+            .map(|((z, y, x), a)| (UVec3::new(x, y, z), a)),
+        geom,
+        level,
+    )
+}
+
+/// Builds the hierarchy with the same geometry as `grid_geometry` (take it from a parallel
+/// build, or make one), single-threaded.
+///
+/// # Errors
+/// No lights.
+pub fn build_reference(
+    lights: &InputLights,
+    geometry: GridGeometry,
+    construction: Construction,
+) -> Result<LightingGrid, GridError> {
+    if lights.positions.is_empty() {
+        return Err(GridError::Empty);
+    }
+    let src = lights.sources();
+    let mut levels = vec![splat_reference(&src, &geometry, 1)];
+    for l in 2..=geometry.l_max {
+        let level = match construction {
+            Construction::GatherFromS1 => {
+                let s1 = &levels[0];
+                let from = Sources {
+                    positions: &s1.position,
+                    intensity: &s1.intensity,
+                    normals: lights.normals.map(|_| &s1.normal[..]),
+                    mass: Some(&s1.mass),
+                    variance: Some(&s1.variance),
+                };
+                splat_reference(&from, &geometry, l)
+            }
+            Construction::ScatterAll => splat_reference(&src, &geometry, l),
+        };
+        levels.push(level);
+    }
+    Ok(super::merge(geometry, super::compact(levels)))
+}
