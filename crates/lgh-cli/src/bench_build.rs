@@ -7,7 +7,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 use glam::Vec3;
 use lgh_core::lighting_grid::synthetic::lights_on_surfaces;
-use lgh_core::lighting_grid::{Construction, InputLights, LevelCount, LightingGrid};
+use lgh_core::lighting_grid::{Construction, GridBuilder, InputLights, LevelCount};
 use lgh_render::World;
 use lgh_render::vpl_gen::generate_vpls;
 
@@ -30,7 +30,8 @@ pub struct BuildArgs {
     /// Number of levels: `auto` (largest l_max with |S1| < N/2) or a number 1..=10.
     #[arg(long, default_value = "auto")]
     pub levels: String,
-    /// Timed runs per configuration; the report gives medians.
+    /// Timed runs per configuration, after one untimed warm-up build; the report gives
+    /// medians.
     #[arg(long, default_value_t = 7)]
     pub runs: usize,
     /// Worker threads (0 = one per core).
@@ -113,14 +114,17 @@ pub fn run(args: &BuildArgs) -> Result<()> {
             let mut steps: BTreeMap<String, Vec<f64>> = BTreeMap::new();
             let mut order: Vec<String> = Vec::new();
             let mut totals = Vec::new();
-            let mut peak = 0u64;
-            let mut last = None;
+            // One builder across runs, as a renderer keeps it across frames; the first (cold)
+            // run is not timed, and gives the peak working memory.
+            let mut builder = GridBuilder::default();
+            let base = peak_rss_reset();
+            builder.build(&lights, levels, construction)?;
+            let peak = match (base, rss("VmHWM:")) {
+                (Some(b), Some(p)) => p.saturating_sub(b),
+                _ => 0,
+            };
             for _ in 0..args.runs.max(1) {
-                let base = peak_rss_reset();
-                let (grid, t) = LightingGrid::build(&lights, levels, construction)?;
-                if let (Some(b), Some(p)) = (base, rss("VmHWM:")) {
-                    peak = peak.max(p.saturating_sub(b));
-                }
+                let t = builder.build(&lights, levels, construction)?;
                 for (name, ms) in &t.0 {
                     if !steps.contains_key(name) {
                         order.push(name.clone());
@@ -128,9 +132,8 @@ pub fn run(args: &BuildArgs) -> Result<()> {
                     steps.entry(name.clone()).or_default().push(*ms);
                 }
                 totals.push(t.total());
-                last = Some(grid);
             }
-            let Some(grid) = last else { continue };
+            let Some(grid) = builder.grid() else { continue };
             let steps_ms: Vec<(String, f64)> = order
                 .iter()
                 .map(|k| (k.clone(), median(steps.get(k).cloned().unwrap_or_default())))

@@ -212,3 +212,39 @@ fn help_explains_every_render_flag() {
         assert!(text.contains(flag), "{flag} missing from --help");
     }
 }
+
+#[test]
+fn bench_build_reports_the_paper_table_as_json() {
+    let out = lgh(&[
+        "bench", "build", "--lights", "500,2000", "--runs", "1", "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let runs = v["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 4);
+    for r in runs {
+        for key in [
+            "lights",
+            "variant",
+            "levels",
+            "lights_per_level",
+            "steps_ms",
+            "total_ms",
+        ] {
+            assert!(r.get(key).is_some(), "missing {key}");
+        }
+        assert!(["gather", "scatter"].contains(&r["variant"].as_str().unwrap()));
+        assert!(r["steps_ms"]["S1"].is_f64() && r["steps_ms"]["merge"].is_f64());
+        let per_level = r["lights_per_level"].as_array().unwrap();
+        assert_eq!(per_level.len() as u64, r["levels"].as_u64().unwrap());
+    }
+    assert_error(
+        &lgh(&["bench", "build", "--levels", "11"]),
+        &["--levels 11"],
+    );
+    assert_error(&lgh(&["bench", "build", "--lights", "0"]), &["--lights"]);
+}

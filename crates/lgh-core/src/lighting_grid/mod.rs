@@ -32,7 +32,7 @@ use glam::{UVec3, Vec3};
 use rayon::prelude::*;
 
 pub use geometry::{GridGeometry, MAX_LEVELS};
-pub use splat::{Level, Sources};
+pub use splat::{Level, Sources, Workspace};
 
 /// The input lights of a hierarchy (S_0): positions, RGB intensities and optional normals.
 #[derive(Clone, Copy, Debug)]
@@ -54,6 +54,7 @@ impl<'a> InputLights<'a> {
             normals: self.normals,
             mass: None,
             variance: None,
+            ordered: false,
         }
     }
 }
@@ -181,7 +182,8 @@ impl LightingGrid {
         self.position.is_empty()
     }
 
-    /// Builds the hierarchy (parallel; deterministic whatever the thread count).
+    /// Builds the hierarchy (parallel; deterministic whatever the thread count) with fresh
+    /// working memory. To rebuild every frame, keep a [`GridBuilder`] instead.
     ///
     /// # Errors
     /// No lights, arrays of different lengths, or a non-finite or negative value.
@@ -190,40 +192,101 @@ impl LightingGrid {
         levels: LevelCount,
         construction: Construction,
     ) -> Result<(Self, BuildTimings), GridError> {
+        let mut b = GridBuilder::default();
+        let t = b.build(lights, levels, construction)?;
+        Ok((b.into_grid(), t))
+    }
+}
+
+/// Builds lighting grid hierarchies frame after frame, keeping its working memory and the
+/// output buffers between builds (as a GPU renderer keeps its buffers).
+#[derive(Debug, Default)]
+pub struct GridBuilder {
+    ws: splat::Workspace,
+    levels: Vec<Level>,
+    grid: Option<LightingGrid>,
+}
+
+impl GridBuilder {
+    /// Builds the hierarchy of `lights`; the result is [`GridBuilder::grid`].
+    ///
+    /// # Errors
+    /// No lights, arrays of different lengths, or a non-finite or negative value.
+    pub fn build(
+        &mut self,
+        lights: &InputLights,
+        levels: LevelCount,
+        construction: Construction,
+    ) -> Result<BuildTimings, GridError> {
         let mut t = BuildTimings::default();
         let (lo, hi) = t.time("bounds", || bounds(lights))?;
         let src = lights.sources();
-        let (geometry, s1) = match levels {
-            LevelCount::Fixed(l) => {
-                let g = GridGeometry::new(lo, hi, l);
-                (g, t.time("S1", || splat::splat(&src, &g, 1)))
-            }
-            LevelCount::Auto => {
-                let g = t.time("level_count", || auto_geometry(lights, lo, hi));
-                (g, t.time("S1", || splat::splat(&src, &g, 1)))
-            }
+        let geometry = match levels {
+            LevelCount::Fixed(l) => GridGeometry::new(lo, hi, l),
+            LevelCount::Auto => t.time("level_count", || {
+                auto_geometry(&mut self.ws, lights, lo, hi)
+            }),
         };
-        let mut levels_out = vec![s1];
+        self.levels
+            .resize_with(geometry.l_max as usize, Level::default);
+        let (s1, rest) = self.levels.split_at_mut(1);
+        let s1 = &mut s1[0];
+        t.time("S1", || {
+            splat::splat_into(&mut self.ws, &src, &geometry, 1, s1)
+        });
         for l in 2..=geometry.l_max {
-            let level = t.time(&format!("S{l}"), || match construction {
+            let out = &mut rest[l as usize - 2];
+            let ws = &mut self.ws;
+            t.time(&format!("S{l}"), || match construction {
                 Construction::GatherFromS1 => {
-                    let s1 = &levels_out[0];
                     let from = Sources {
                         positions: &s1.position,
                         intensity: &s1.intensity,
                         normals: lights.normals.map(|_| &s1.normal[..]),
                         mass: Some(&s1.mass),
                         variance: Some(&s1.variance),
+                        ordered: true,
                     };
-                    splat::splat(&from, &geometry, l)
+                    splat::splat_into(ws, &from, &geometry, l, out);
                 }
-                Construction::ScatterAll => splat::splat(&src, &geometry, l),
+                Construction::ScatterAll => splat::splat_into(ws, &src, &geometry, l, out),
             });
-            levels_out.push(level);
         }
-        let levels_out = t.time("compaction", || compact(levels_out));
-        let grid = t.time("merge", || merge(geometry, levels_out));
-        Ok((grid, t))
+        let levels = &mut self.levels;
+        t.time("compaction", || levels.par_iter_mut().for_each(compact));
+        let grid = self
+            .grid
+            .get_or_insert_with(|| LightingGrid::empty(geometry));
+        t.time("merge", || merge_into(geometry, levels, grid));
+        Ok(t)
+    }
+
+    /// The last hierarchy built (empty before the first build).
+    #[must_use]
+    pub fn grid(&self) -> Option<&LightingGrid> {
+        self.grid.as_ref()
+    }
+
+    /// Takes the last hierarchy built.
+    #[must_use]
+    pub fn into_grid(self) -> LightingGrid {
+        self.grid
+            .unwrap_or_else(|| LightingGrid::empty(GridGeometry::new(Vec3::ZERO, Vec3::ZERO, 1)))
+    }
+}
+
+impl LightingGrid {
+    pub(crate) fn empty(geometry: GridGeometry) -> Self {
+        Self {
+            geometry,
+            level_start: vec![0],
+            vertex: Vec::new(),
+            position: Vec::new(),
+            intensity: Vec::new(),
+            deviation: Vec::new(),
+            normal: Vec::new(),
+            mass: Vec::new(),
+        }
     }
 }
 
@@ -238,38 +301,58 @@ fn bounds(lights: &InputLights) -> Result<(Vec3, Vec3), GridError> {
     if n == 0 {
         return Err(GridError::Empty);
     }
-    if let Some(index) = (0..n).into_par_iter().find_first(|&i| {
-        let (p, c) = (lights.positions[i], lights.intensity[i]);
-        !p.is_finite() || !c.is_finite() || c.min_element() < 0.0
-    }) {
-        return Err(GridError::InvalidLight { index });
-    }
-    Ok(lights
-        .positions
-        .par_iter()
+    // One pass: bounds and the first invalid index (min is exact, so the split does not
+    // matter).
+    let (lo, hi, bad) = (0..n)
+        .into_par_iter()
         .fold(
-            || (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+            || {
+                (
+                    Vec3::splat(f32::INFINITY),
+                    Vec3::splat(f32::NEG_INFINITY),
+                    usize::MAX,
+                )
+            },
+            |(lo, hi, bad), i| {
+                let (p, c) = (lights.positions[i], lights.intensity[i]);
+                let ok = p.is_finite() && c.is_finite() && c.min_element() >= 0.0;
+                (lo.min(p), hi.max(p), if ok { bad } else { bad.min(i) })
+            },
         )
         .reduce(
-            || (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |a, b| (a.0.min(b.0), a.1.max(b.1)),
-        ))
+            || {
+                (
+                    Vec3::splat(f32::INFINITY),
+                    Vec3::splat(f32::NEG_INFINITY),
+                    usize::MAX,
+                )
+            },
+            |a, b| (a.0.min(b.0), a.1.max(b.1), a.2.min(b.2)),
+        );
+    if bad != usize::MAX {
+        return Err(GridError::InvalidLight { index: bad });
+    }
+    Ok((lo, hi))
 }
 
 /// The paper's rule: the largest l_max with |S_1| < N/2 (at least 1). |S_1| for a given
 /// l_max is the number of occupied vertices at spacing h_top / 2^(l_max - 1), which grows with
 /// l_max; the search counts them ([`splat::count_vertices`]) walking from a first guess (for
 /// lights on surfaces |S_1| grows about 4x per level).
-fn auto_geometry(lights: &InputLights, lo: Vec3, hi: Vec3) -> GridGeometry {
+fn auto_geometry(
+    ws: &mut splat::Workspace,
+    lights: &InputLights,
+    lo: Vec3,
+    hi: Vec3,
+) -> GridGeometry {
     let n = lights.positions.len();
     if n < 2 || (hi - lo).max_element() <= 0.0 {
         return GridGeometry::new(lo, hi, 1);
     }
     let src = lights.sources();
-    let fits = |l: u32| {
+    let mut fits = |l: u32| {
         let g = GridGeometry::new(lo, hi, l);
-        l == 1 || 2 * splat::count_vertices(&src, &g, 1) < n
+        l == 1 || 2 * splat::count_vertices(ws, &src, &g, 1) < n
     };
     let guess = (1.0 + ((n as f64 / 8.0).max(1.0).log(4.0)).round()) as u32;
     let mut l = guess.clamp(1, MAX_LEVELS);
@@ -285,57 +368,47 @@ fn auto_geometry(lights: &InputLights, lo: Vec3, hi: Vec3) -> GridGeometry {
     GridGeometry::new(lo, hi, l)
 }
 
-/// Removes grid lights of zero intensity (all channels zero): they light nothing.
-pub(crate) fn compact(levels: Vec<Level>) -> Vec<Level> {
-    levels
-        .into_par_iter()
-        .map(|level| {
-            let keep: Vec<usize> = (0..level.len())
-                .filter(|&i| level.intensity[i].max_element() > 0.0)
-                .collect();
-            if keep.len() == level.len() {
-                return level;
-            }
-            Level {
-                vertex: keep.iter().map(|&i| level.vertex[i]).collect(),
-                position: keep.iter().map(|&i| level.position[i]).collect(),
-                intensity: keep.iter().map(|&i| level.intensity[i]).collect(),
-                variance: keep.iter().map(|&i| level.variance[i]).collect(),
-                normal: keep.iter().map(|&i| level.normal[i]).collect(),
-                mass: keep.iter().map(|&i| level.mass[i]).collect(),
-            }
-        })
-        .collect()
+/// Removes grid lights of zero intensity (all channels zero) in place: they light nothing.
+pub(crate) fn compact(level: &mut Level) {
+    let mut k = 0;
+    for i in 0..level.len() {
+        if level.intensity[i].max_element() > 0.0 {
+            level.vertex[k] = level.vertex[i];
+            level.position[k] = level.position[i];
+            level.intensity[k] = level.intensity[i];
+            level.variance[k] = level.variance[i];
+            level.normal[k] = level.normal[i];
+            level.mass[k] = level.mass[i];
+            k += 1;
+        }
+    }
+    level.truncate(k);
 }
 
-/// Concatenates the levels into one buffer with per-level offsets; variances become
-/// deviations pi sigma.
-pub(crate) fn merge(geometry: GridGeometry, levels: Vec<Level>) -> LightingGrid {
-    let total: usize = levels.iter().map(Level::len).sum();
-    let mut g = LightingGrid {
-        geometry,
-        level_start: Vec::with_capacity(levels.len() + 1),
-        vertex: Vec::with_capacity(total),
-        position: Vec::with_capacity(total),
-        intensity: Vec::with_capacity(total),
-        deviation: Vec::with_capacity(total),
-        normal: Vec::with_capacity(total),
-        mass: Vec::with_capacity(total),
-    };
+/// Concatenates the levels into `g` (reusing its buffers) with per-level offsets; variances
+/// become deviations pi sigma.
+pub(crate) fn merge_into(geometry: GridGeometry, levels: &[Level], g: &mut LightingGrid) {
+    g.geometry = geometry;
+    g.level_start.clear();
+    g.vertex.clear();
+    g.position.clear();
+    g.intensity.clear();
+    g.deviation.clear();
+    g.normal.clear();
+    g.mass.clear();
     g.level_start.push(0);
     for level in levels {
-        g.vertex.extend(level.vertex);
-        g.position.extend(level.position);
-        g.intensity.extend(level.intensity);
+        g.vertex.extend_from_slice(&level.vertex);
+        g.position.extend_from_slice(&level.position);
+        g.intensity.extend_from_slice(&level.intensity);
         g.deviation.extend(
             level
                 .variance
                 .iter()
                 .map(|v| v.max(Vec3::ZERO).powf(0.5) * std::f32::consts::PI),
         );
-        g.normal.extend(level.normal);
-        g.mass.extend(level.mass);
+        g.normal.extend_from_slice(&level.normal);
+        g.mass.extend_from_slice(&level.mass);
         g.level_start.push(g.position.len() as u32);
     }
-    g
 }

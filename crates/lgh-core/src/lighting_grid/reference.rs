@@ -71,6 +71,7 @@ pub fn build_reference(
                     normals: lights.normals.map(|_| &s1.normal[..]),
                     mass: Some(&s1.mass),
                     variance: Some(&s1.variance),
+                    ordered: true,
                 };
                 splat_reference(&from, &geometry, l)
             }
@@ -78,5 +79,10 @@ pub fn build_reference(
         };
         levels.push(level);
     }
-    Ok(super::merge(geometry, super::compact(levels)))
+    for level in &mut levels {
+        super::compact(level);
+    }
+    let mut grid = LightingGrid::empty(geometry);
+    super::merge_into(geometry, &levels, &mut grid);
+    Ok(grid)
 }

@@ -2,21 +2,24 @@
 //!
 //! Each source light adds its trilinear weights w to the 8 vertices of its cell: weight W,
 //! position, squared position, intensity and normal sums (design notes 3.1). On a GPU this is a
-//! scatter with atomics; here it is organised so that no two tasks ever write the same
-//! vertex, without atomics or locks:
+//! scatter with atomics; here it is organised so that no two tasks ever write the same memory,
+//! without atomics or locks:
 //!
-//! 1. every source gets its cell (c_x, c_y, c_z) and in-cell fraction f (parallel map);
-//! 2. sources are bucketed by c_z with a stable counting sort (so each bucket keeps the input
-//!    order);
-//! 3. each vertex z-layer v_z is one task: the sources of cell layers v_z - 1 and v_z add
-//!    their weights into a dense 2-D scratch grid private to the task, then the touched
-//!    vertices are emitted in (y, x) order;
-//! 4. layers are concatenated in z order.
+//! 1. every source gets its cell and in-cell fraction f (parallel map);
+//! 2. sources are bucketed by cell z with a stable counting sort; unordered inputs (S_0) are
+//!    also sorted by (cell y, cell x) inside each bucket for memory locality (S_1 lights come
+//!    out of their own build in vertex order already), and their attributes are packed in
+//!    that order;
+//! 3. vertex layer v_z receives from the sources of cell layers v_z - 1 and v_z, which are one
+//!    contiguous range; the range is cut into chunks of [`CHUNK`] sources, and each
+//!    (layer, chunk) task sums its contributions in a private dense 2-D scratch grid;
+//! 4. each layer adds its chunks' partial sums in chunk order, and layers are concatenated in
+//!    z order, each in (y, x) order.
 //!
-//! Every vertex thus receives its contributions in one fixed order (cell layer, then input
-//! order), so the result does not depend on the number of threads. Positions are accumulated
-//! relative to the receiving vertex, in cell units, which keeps the variance
-//! Q/W - (P/W)^2 free of cancellation far from the origin.
+//! The chunk boundaries are fixed by the data, not by the thread pool, so the result does not
+//! depend on the number of threads. Positions are accumulated relative to the receiving
+//! vertex, in cell units and in double precision, which keeps the variance Q/W - (P/W)^2
+//! free of cancellation far from the origin and the sums of coarse levels exact to ~1e-12.
 
 use glam::{DVec3, UVec3, Vec3};
 use rayon::prelude::*;
@@ -38,6 +41,9 @@ pub struct Sources<'a> {
     pub mass: Option<&'a [f32]>,
     /// Per-axis positional variance of each source (the spread of the inputs it stands for).
     pub variance: Option<&'a [Vec3]>,
+    /// True if the sources are already in vertex order of a finer grid (the lights of S_1):
+    /// the locality sort is skipped.
+    pub ordered: bool,
 }
 
 /// The grid lights of one level in vertex order (z, then y, then x), before compaction.
@@ -83,6 +89,24 @@ impl Level {
         self.mass.push(a.w as f32);
     }
 
+    pub(crate) fn truncate(&mut self, n: usize) {
+        self.vertex.truncate(n);
+        self.position.truncate(n);
+        self.intensity.truncate(n);
+        self.variance.truncate(n);
+        self.normal.truncate(n);
+        self.mass.truncate(n);
+    }
+
+    fn clear(&mut self) {
+        self.vertex.clear();
+        self.position.clear();
+        self.intensity.clear();
+        self.variance.clear();
+        self.normal.clear();
+        self.mass.clear();
+    }
+
     fn append(&mut self, other: Level) {
         self.vertex.extend(other.vertex);
         self.position.extend(other.position);
@@ -106,17 +130,27 @@ pub(crate) struct Accum {
 }
 
 impl Accum {
-    /// Adds prepared source `s` with trilinear weight `w`, at local offset `local` (cell
+    /// Adds prepared source `ps` with trilinear weight `w`, at local offset `local` (cell
     /// units) from the vertex.
     #[inline(always)]
-    fn add(&mut self, prep: &Prepared, s: usize, w: f32, local: Vec3) {
-        let wm = f64::from(w * prep.mass[s]);
+    fn add(&mut self, ps: &PSource, w: f32, local: Vec3) {
+        let wm = f64::from(w * ps.mass);
         let local = local.as_dvec3();
         self.w += wm;
         self.p += wm * local;
-        self.q += wm * (local * local + prep.variance[s].as_dvec3());
-        self.i += f64::from(w) * prep.intensity[s].as_dvec3();
-        self.n += wm * prep.normal[s].as_dvec3();
+        self.q += wm * (local * local + ps.variance.as_dvec3());
+        self.i += f64::from(w) * ps.intensity.as_dvec3();
+        self.n += wm * ps.normal.as_dvec3();
+    }
+
+    /// Adds another partial sum.
+    #[inline]
+    fn merge(&mut self, o: &Accum) {
+        self.w += o.w;
+        self.p += o.p;
+        self.q += o.q;
+        self.i += o.i;
+        self.n += o.n;
     }
 
     /// Adds source `s` of `src` (unprepared) with weight `w` at local offset `local`;
@@ -154,106 +188,126 @@ pub(crate) fn corner_weight(f: Vec3, d: UVec3) -> f32 {
     pick(f.x, d.x) * pick(f.y, d.y) * pick(f.z, d.z)
 }
 
-/// The sources of a level in bucket order: grouped by cell z (a stable counting sort), and
-/// inside each z bucket sorted by (cell y, cell x, input index), so that a layer task sweeps
-/// its scratch rows in order. Attributes are copied into that order (variances converted to
-/// cell units) so that the hot loop reads memory sequentially.
-struct Prepared {
-    cell: Vec<UVec3>,
-    frac: Vec<Vec3>,
-    intensity: Vec<Vec3>,
-    normal: Vec<Vec3>,
-    mass: Vec<f32>,
-    variance: Vec<Vec3>,
-    /// Start of each z bucket (r + 1 entries).
+/// Sources per task: a layer with more sources is split into chunks whose partial sums are
+/// added in chunk order.
+pub const CHUNK: usize = 1 << 15;
+
+/// One source, prepared for a level: its cell, in-cell fraction and attributes, packed so
+/// that the hot loop reads memory sequentially (variance in cell units).
+#[derive(Clone, Copy, Debug, Default)]
+struct PSource {
+    f: Vec3,
+    cell: UVec3,
+    intensity: Vec3,
+    normal: Vec3,
+    mass: f32,
+    variance: Vec3,
+}
+
+/// Reusable working memory of the splat: a renderer that rebuilds its hierarchy every frame
+/// keeps one, so that no step pays for fresh memory (page faults cost about as much as the
+/// arithmetic here). After [`Workspace::prepare`], bucket z of the prepared sources is
+/// `src[start[z]..start[z + 1]]`.
+#[derive(Debug, Default)]
+pub struct Workspace {
+    located: Vec<(UVec3, Vec3)>,
+    order: Vec<u64>,
+    src: Vec<PSource>,
     start: Vec<usize>,
+    next: Vec<usize>,
     r: u32,
 }
 
-fn prepare(src: &Sources, geom: &GridGeometry, level: u32) -> Prepared {
-    let h = geom.cell_size(level);
-    let r = geom.cells_per_axis(level);
-    let located: Vec<(UVec3, Vec3)> = src
-        .positions
-        .par_iter()
-        .map(|&p| locate(p, geom.origin, h, r))
-        .collect();
-    let mut start = vec![0usize; r as usize + 1];
-    for (c, _) in &located {
-        start[c.z as usize + 1] += 1;
-    }
-    for z in 0..r as usize {
-        start[z + 1] += start[z];
-    }
-    let mut next = start.clone();
-    let mut order = vec![0u64; located.len()];
-    for (i, (c, _)) in located.iter().enumerate() {
-        let z = c.z as usize;
-        // (y, x, index) packed so that sorting a bucket orders it by row, column, input order.
-        order[next[z]] = (u64::from(c.y) << 54) | (u64::from(c.x) << 44) | i as u64;
-        next[z] += 1;
-    }
-    let mut buckets: Vec<&mut [u64]> = Vec::with_capacity(r as usize);
-    let mut rest = &mut order[..];
-    for z in 0..r as usize {
-        let (head, tail) = rest.split_at_mut(start[z + 1] - start[z]);
-        buckets.push(head);
-        rest = tail;
-    }
-    buckets.into_par_iter().for_each(|b| b.sort_unstable());
-    let index = |k: u64| (k & ((1 << 44) - 1)) as usize;
-    let inv_h2 = 1.0 / (h * h).max(f32::MIN_POSITIVE);
-    let gather = |f: &(dyn Fn(usize) -> Vec3 + Sync)| -> Vec<Vec3> {
-        order.par_iter().map(|&k| f(index(k))).collect()
-    };
-    Prepared {
-        cell: order.par_iter().map(|&k| located[index(k)].0).collect(),
-        frac: order.par_iter().map(|&k| located[index(k)].1).collect(),
-        intensity: gather(&|i| src.intensity[i]),
-        normal: match src.normals {
-            Some(n) => gather(&|i| n[i]),
-            None => vec![Vec3::ZERO; order.len()],
-        },
-        variance: match src.variance {
-            Some(v) => gather(&|i| v[i] * inv_h2),
-            None => vec![Vec3::ZERO; order.len()],
-        },
-        mass: order
+impl Workspace {
+    /// Locates and buckets the sources; with `pack`, also sorts the buckets (unordered
+    /// sources) and packs the attributes (not needed to count vertices).
+    fn prepare(&mut self, src: &Sources, geom: &GridGeometry, level: u32, pack: bool) {
+        let h = geom.cell_size(level);
+        let r = geom.cells_per_axis(level);
+        self.r = r;
+        src.positions
             .par_iter()
-            .map(|&k| src.mass.map_or(1.0, |m| m[index(k)]))
-            .collect(),
-        start,
-        r,
+            .map(|&p| locate(p, geom.origin, h, r))
+            .collect_into_vec(&mut self.located);
+        self.start.clear();
+        self.start.resize(r as usize + 1, 0);
+        for (c, _) in &self.located {
+            self.start[c.z as usize + 1] += 1;
+        }
+        for z in 0..r as usize {
+            self.start[z + 1] += self.start[z];
+        }
+        self.next.clear();
+        self.next.extend_from_slice(&self.start);
+        self.order.clear();
+        self.order.resize(self.located.len(), 0);
+        for (i, (c, _)) in self.located.iter().enumerate() {
+            let z = c.z as usize;
+            // (y, x, index) packed so that sorting a bucket orders it by row, column, input.
+            self.order[self.next[z]] = (u64::from(c.y) << 54) | (u64::from(c.x) << 44) | i as u64;
+            self.next[z] += 1;
+        }
+        if !pack {
+            return;
+        }
+        if !src.ordered {
+            let mut buckets: Vec<&mut [u64]> = Vec::with_capacity(r as usize);
+            let mut rest = &mut self.order[..];
+            for z in 0..r as usize {
+                let (head, tail) = rest.split_at_mut(self.start[z + 1] - self.start[z]);
+                buckets.push(head);
+                rest = tail;
+            }
+            buckets.into_par_iter().for_each(|b| b.sort_unstable());
+        }
+        let inv_h2 = 1.0 / (h * h).max(f32::MIN_POSITIVE);
+        let located = &self.located;
+        self.order
+            .par_iter()
+            .map(|&k| {
+                let i = (k & ((1 << 44) - 1)) as usize;
+                let (cell, f) = located[i];
+                PSource {
+                    f,
+                    cell,
+                    intensity: src.intensity[i],
+                    normal: src.normals.map_or(Vec3::ZERO, |n| n[i]),
+                    mass: src.mass.map_or(1.0, |m| m[i]),
+                    variance: src.variance.map_or(Vec3::ZERO, |v| v[i] * inv_h2),
+                }
+            })
+            .collect_into_vec(&mut self.src);
+    }
+
+    /// The contiguous range of prepared sources that can reach vertex layer `vz`.
+    fn layer_sources(&self, vz: u32) -> std::ops::Range<usize> {
+        self.start[vz.saturating_sub(1) as usize]..self.start[(vz + 1).min(self.r) as usize]
     }
 }
 
-/// Calls `visit(index_in_layer, source, weight, local_offset)` for every non-zero
-/// contribution to vertex layer `vz`, in the fixed order described in the module docs
-/// (`source` indexes the prepared, bucket-ordered arrays).
+/// Calls `visit(index_in_layer, weight, local_offset)` for each non-zero contribution of
+/// prepared source `ps` to vertex layer `vz` (at most 4: the source's cell layer is vz - 1 or
+/// vz).
 #[inline(always)]
-fn for_each_contribution(prep: &Prepared, vz: u32, mut visit: impl FnMut(usize, usize, f32, Vec3)) {
-    let side = prep.r as usize + 1;
-    let lo = vz.saturating_sub(1);
-    let hi = vz.min(prep.r - 1);
-    for cz in lo..=hi {
-        let dz = vz - cz;
-        for s in prep.start[cz as usize]..prep.start[cz as usize + 1] {
-            let (c, f) = (prep.cell[s], prep.frac[s]);
-            let wz = if dz == 1 { f.z } else { 1.0 - f.z };
-            if wz <= 0.0 {
-                continue;
-            }
-            let row = c.y as usize * side + c.x as usize;
-            let wy = [1.0 - f.y, f.y];
-            let wx = [1.0 - f.x, f.x];
-            for (dy, wy) in wy.into_iter().enumerate() {
-                for (dx, wx) in wx.into_iter().enumerate() {
-                    let w = wx * wy * wz;
-                    if w > 0.0 {
-                        let local = f - Vec3::new(dx as f32, dy as f32, dz as f32);
-                        visit(row + dy * side + dx, s, w, local);
-                    }
-                }
+fn contributions(ps: &PSource, vz: u32, side: usize, mut visit: impl FnMut(usize, f32, Vec3)) {
+    let dz = vz.wrapping_sub(ps.cell.z);
+    if dz > 1 {
+        return;
+    }
+    let f = ps.f;
+    let wz = if dz == 1 { f.z } else { 1.0 - f.z };
+    if wz <= 0.0 {
+        return;
+    }
+    let row = ps.cell.y as usize * side + ps.cell.x as usize;
+    let wy = [1.0 - f.y, f.y];
+    let wx = [1.0 - f.x, f.x];
+    for (dy, wy) in wy.into_iter().enumerate() {
+        for (dx, wx) in wx.into_iter().enumerate() {
+            let w = wx * wy * wz;
+            if w > 0.0 {
+                let local = f - Vec3::new(dx as f32, dy as f32, dz as f32);
+                visit(row + dy * side + dx, w, local);
             }
         }
     }
@@ -287,6 +341,14 @@ impl Scratch {
     }
 
     #[inline]
+    fn mark(&mut self, idx: usize) {
+        if self.stamp[idx] != self.generation {
+            self.stamp[idx] = self.generation;
+            self.touched.push(idx as u32);
+        }
+    }
+
+    #[inline]
     fn touch(&mut self, idx: usize) -> &mut Accum {
         if self.stamp[idx] != self.generation {
             self.stamp[idx] = self.generation;
@@ -305,68 +367,123 @@ fn with_scratch<T>(f: impl FnOnce(&mut Scratch) -> T) -> T {
     SCRATCH.with(|s| f(&mut s.borrow_mut()))
 }
 
-/// Builds the grid lights of `level` from `src` (see the module docs).
+/// Builds the grid lights of `level` from `src` into `out` (see the module docs), using
+/// (and growing) the working memory `ws`.
+pub fn splat_into(
+    ws: &mut Workspace,
+    src: &Sources,
+    geom: &GridGeometry,
+    level: u32,
+    out: &mut Level,
+) {
+    ws.prepare(src, geom, level, true);
+    let ws = &*ws;
+    let side = ws.r as usize + 1;
+    let layers: Vec<Level> = (0..=ws.r)
+        .into_par_iter()
+        .map(|vz| {
+            let range = ws.layer_sources(vz);
+            let mut part = Level::default();
+            if range.len() <= CHUNK {
+                with_scratch(|scratch| {
+                    accumulate(scratch, &ws.src[range], vz, side);
+                    for &idx in &scratch.touched {
+                        part.push(
+                            vertex_of(idx, side, vz),
+                            &scratch.acc[idx as usize],
+                            geom,
+                            level,
+                        );
+                    }
+                });
+                return part;
+            }
+            // A crowded layer (coarse levels): chunks in parallel, partial sums added in chunk
+            // order (stable sort keeps equal vertices in chunk order).
+            let mut sums: Vec<(u32, Accum)> = ws.src[range]
+                .par_chunks(CHUNK)
+                .map(|chunk| {
+                    with_scratch(|scratch| {
+                        accumulate(scratch, chunk, vz, side);
+                        scratch
+                            .touched
+                            .iter()
+                            .map(|&i| (i, scratch.acc[i as usize]))
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .flatten_iter()
+                .collect();
+            sums.sort_by_key(|(idx, _)| *idx);
+            let mut i = 0;
+            while i < sums.len() {
+                let (idx, mut sum) = sums[i];
+                let mut j = i + 1;
+                while j < sums.len() && sums[j].0 == idx {
+                    sum.merge(&sums[j].1);
+                    j += 1;
+                }
+                part.push(vertex_of(idx, side, vz), &sum, geom, level);
+                i = j;
+            }
+            part
+        })
+        .collect();
+    out.clear();
+    for l in layers {
+        out.append(l);
+    }
+}
+
+/// Adds the contributions of `sources` to vertex layer `vz` into a fresh scratch layer and
+/// sorts its touched list.
+fn accumulate(scratch: &mut Scratch, sources: &[PSource], vz: u32, side: usize) {
+    scratch.begin(side * side);
+    for ps in sources {
+        contributions(ps, vz, side, |idx, w, local| {
+            scratch.touch(idx).add(ps, w, local);
+        });
+    }
+    scratch.touched.sort_unstable();
+}
+
+#[inline]
+fn vertex_of(idx: u32, side: usize, vz: u32) -> UVec3 {
+    UVec3::new(idx % side as u32, idx / side as u32, vz)
+}
+
+/// Builds the grid lights of `level` from `src` with fresh working memory.
 #[must_use]
 pub fn splat(src: &Sources, geom: &GridGeometry, level: u32) -> Level {
-    let prep = prepare(src, geom, level);
-    let side = prep.r as usize + 1;
-    let layers: Vec<Level> = (0..=prep.r)
+    let mut out = Level::default();
+    splat_into(&mut Workspace::default(), src, geom, level, &mut out);
+    out
+}
+
+/// Number of vertices of `level` that receive a non-zero weight from `src` (the length of
+/// [`splat`]'s result, before compaction), without computing them: one task per vertex layer
+/// marks the touched vertices in its scratch. Used to choose the number of levels.
+pub fn count_vertices(ws: &mut Workspace, src: &Sources, geom: &GridGeometry, level: u32) -> usize {
+    ws.prepare(src, geom, level, false);
+    let ws = &*ws;
+    let side = ws.r as usize + 1;
+    (0..=ws.r)
         .into_par_iter()
         .map(|vz| {
             with_scratch(|scratch| {
                 scratch.begin(side * side);
-                for_each_contribution(&prep, vz, |idx, s, w, local| {
-                    scratch.touch(idx).add(&prep, s, w, local);
-                });
-                let mut touched = std::mem::take(&mut scratch.touched);
-                touched.sort_unstable();
-                let mut out = Level::default();
-                for &idx in &touched {
-                    let v = UVec3::new(idx % side as u32, idx / side as u32, vz);
-                    out.push(v, &scratch.acc[idx as usize], geom, level);
+                for &k in &ws.order[ws.layer_sources(vz)] {
+                    let (cell, f) = ws.located[(k & ((1 << 44) - 1)) as usize];
+                    let ps = PSource {
+                        f,
+                        cell,
+                        ..PSource::default()
+                    };
+                    contributions(&ps, vz, side, |idx, _, _| scratch.mark(idx));
                 }
-                scratch.touched = touched;
-                out
+                scratch.touched.len()
             })
         })
-        .collect();
-    let mut level_out = Level::default();
-    for l in layers {
-        level_out.append(l);
-    }
-    level_out
-}
-
-/// Number of vertices of `level` that receive a non-zero weight from `src` (the length of
-/// [`splat`]'s result), counted with a shared bitset over all vertices of the level (one
-/// atomic OR per contribution; the count does not depend on the order). Used to choose the
-/// number of levels without building the candidates.
-#[must_use]
-pub fn count_vertices(src: &Sources, geom: &GridGeometry, level: u32) -> usize {
-    use std::sync::atomic::{AtomicU64, Ordering};
-    let h = geom.cell_size(level);
-    let r = geom.cells_per_axis(level);
-    let side = r as usize + 1;
-    let bits: Vec<AtomicU64> = (0..(side * side * side).div_ceil(64))
-        .map(|_| AtomicU64::new(0))
-        .collect();
-    src.positions.par_iter().for_each(|&p| {
-        let (c, f) = locate(p, geom.origin, h, r);
-        for dz in 0..2u32 {
-            for dy in 0..2u32 {
-                for dx in 0..2u32 {
-                    let d = UVec3::new(dx, dy, dz);
-                    if corner_weight(f, d) > 0.0 {
-                        let v = c + d;
-                        let idx = (v.z as usize * side + v.y as usize) * side + v.x as usize;
-                        bits[idx / 64].fetch_or(1 << (idx % 64), Ordering::Relaxed);
-                    }
-                }
-            }
-        }
-    });
-    bits.par_iter()
-        .map(|w| w.load(Ordering::Relaxed).count_ones() as usize)
         .sum()
 }
 
