@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use anyhow::{Result, anyhow};
 use clap::Args;
 use lgh_render::Image;
-use lgh_render::metrics::diff;
+use lgh_render::image::ImageFormat;
+use lgh_render::metrics::{diff, display_bytes, flip_mean};
 
 /// Compare image A against the reference B.
 #[derive(Debug, Args)]
@@ -14,9 +15,13 @@ pub struct DiffArgs {
     pub a: PathBuf,
     /// The reference image, same size.
     pub b: PathBuf,
-    /// Print one JSON object {rmse, rel_rmse, rel_bias, max_abs} instead of text.
+    /// Print one JSON object {rmse, rel_rmse, rel_bias, max_abs, flip} instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Exposure applied to EXR inputs before tone mapping them for FLIP (PNG inputs are
+    /// compared as they are).
+    #[arg(long, default_value_t = 1.0)]
+    pub exposure: f32,
 }
 
 pub fn run(args: &DiffArgs) -> Result<()> {
@@ -24,12 +29,20 @@ pub fn run(args: &DiffArgs) -> Result<()> {
     let b = Image::load(&args.b)?;
     let m =
         diff(&a, &b).map_err(|e| anyhow!("{} vs {}: {e}", args.a.display(), args.b.display()))?;
+    let flip = flip_mean(
+        &display_bytes(&a, ImageFormat::from_path(&args.a)?, args.exposure),
+        &display_bytes(&b, ImageFormat::from_path(&args.b)?, args.exposure),
+        a.width,
+        a.height,
+    )
+    .map_err(|e| anyhow!("{e}"))?;
     if args.json {
         let v = serde_json::json!({
             "rmse": m.rmse,
             "rel_rmse": finite_or_null(m.rel_rmse),
             "rel_bias": finite_or_null(m.rel_bias),
             "max_abs": m.max_abs,
+            "flip": flip,
         });
         println!("{v}");
     } else {
@@ -37,6 +50,7 @@ pub fn run(args: &DiffArgs) -> Result<()> {
         println!("rel_rmse  {:.6}", m.rel_rmse);
         println!("rel_bias  {:+.6}", m.rel_bias);
         println!("max_abs   {:.6}", m.max_abs);
+        println!("flip      {flip:.6}  (LDR-FLIP mean, 0 = identical)");
     }
     Ok(())
 }

@@ -73,6 +73,12 @@ fn renders_the_default_scene_to_png_and_exr_with_stats_and_diffs_them() {
     let m: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(m["rmse"], 0.0);
     assert_eq!(m["rel_bias"], 0.0);
+    assert_eq!(m["flip"], 0.0);
+    // PNG against EXR of the same render: same picture after tone mapping, FLIP near 0.
+    let out = lgh(&["diff", s(&png), s(&exr), "--json"]);
+    assert!(out.status.success());
+    let m: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(m["flip"].as_f64().unwrap() < 0.01, "{m}");
     let _ = std::fs::remove_dir_all(&d);
 }
 
