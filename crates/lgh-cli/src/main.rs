@@ -10,6 +10,7 @@
 mod bench_build;
 mod bench_cmd;
 mod diff_cmd;
+mod heatmap;
 mod progress_bar;
 mod render_cmd;
 mod scene_arg;

@@ -5,7 +5,9 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
+use lgh_core::lighting_grid::LevelCount;
 use lgh_render::image::check_output_path;
+use lgh_render::lgh::{LghSettings, MAX_SHADOW_SAMPLES};
 use lgh_render::{Component, Method, RenderSettings, World, render_frame};
 
 use crate::progress_bar::Bars;
@@ -18,6 +20,19 @@ pub enum MethodArg {
     Brute,
     /// Every pixel sums every VPL without shadow rays.
     BruteUnshadowed,
+    /// Lighting grid hierarchy (Lin & Yuksel 2019) with stochastic ray-traced shadows.
+    Lgh,
+    /// Lighting grid hierarchy without shadows.
+    LghUnshadowed,
+}
+
+/// Shadow filters.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum FilterArg {
+    /// Edge-avoiding a-trous wavelet filter (Dammertz et al. 2010).
+    Atrous,
+    /// No filter.
+    None,
 }
 
 /// Parts of the radiance to write.
@@ -66,6 +81,32 @@ pub struct RenderArgs {
     /// Exposure multiplier for PNG output (default: the scene file's, else 1).
     #[arg(long)]
     pub exposure: Option<f32>,
+    /// lgh: alpha of the blending radii r_l = alpha h_l (larger = more accurate, slower).
+    #[arg(long, default_value_t = 1.0)]
+    pub alpha: f32,
+    /// lgh: number of hierarchy levels, `auto` (largest with |S1| < VPLs/2) or 1..=10.
+    #[arg(long, default_value = "auto")]
+    pub levels: String,
+    /// lgh: shadow samples (shadow rays) per pixel, 0 = no shadows (at most 16).
+    #[arg(long, default_value_t = 4)]
+    pub shadow_samples: u32,
+    /// lgh: lowest level whose lights are shadow candidates (2 skips S1, as the paper; 0 adds
+    /// the VPLs when --start-level is 0).
+    #[arg(long, default_value_t = 2)]
+    pub shadow_from_level: u32,
+    /// lgh: filter applied to the shadow estimates.
+    #[arg(long, value_enum, default_value = "atrous")]
+    pub filter: FilterArg,
+    /// lgh: a-trous passes.
+    #[arg(long, default_value_t = 5)]
+    pub filter_passes: u32,
+    /// lgh: lowest level shaded: 1 (S1, the paper's default) or 0 (the VPLs themselves).
+    #[arg(long, default_value_t = 1)]
+    pub start_level: u32,
+    /// lgh: write the per-pixel overdraw (lights covering each pixel) as a colour map with a
+    /// legend bar to this PNG (the paper's Fig. 5).
+    #[arg(long)]
+    pub heatmap: Option<PathBuf>,
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
@@ -96,6 +137,41 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// The LGH settings from the flags, validated.
+fn lgh_settings(args: &RenderArgs) -> Result<LghSettings> {
+    if !args.alpha.is_finite() || args.alpha <= 0.0 {
+        bail!("--alpha {}: must be a positive number", args.alpha);
+    }
+    let levels = match args.levels.as_str() {
+        "auto" => LevelCount::Auto,
+        s => match s.parse::<u32>() {
+            Ok(l) if (1..=10).contains(&l) => LevelCount::Fixed(l),
+            _ => bail!("--levels {s}: expected 'auto' or a number from 1 to 10"),
+        },
+    };
+    if args.shadow_samples > MAX_SHADOW_SAMPLES {
+        bail!(
+            "--shadow-samples {}: at most {MAX_SHADOW_SAMPLES}",
+            args.shadow_samples
+        );
+    }
+    if args.start_level > 1 {
+        bail!("--start-level {}: expected 0 or 1", args.start_level);
+    }
+    Ok(LghSettings {
+        alpha: args.alpha,
+        levels,
+        shadow_samples: args.shadow_samples,
+        shadow_from_level: args.shadow_from_level,
+        start_level: args.start_level,
+        filter_passes: match args.filter {
+            FilterArg::Atrous => args.filter_passes,
+            FilterArg::None => 0,
+        },
+        ..LghSettings::default()
+    })
+}
+
 pub fn run(args: &RenderArgs) -> Result<()> {
     check_output_path(&args.out)?;
     if let Some(stats) = &args.stats
@@ -114,6 +190,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     {
         bail!("--exposure {e}: must be a positive number");
     }
+    if let Some(h) = &args.heatmap {
+        check_output_path(h)?;
+    }
+    let lgh = lgh_settings(args)?;
     let threads = crate::set_threads(args.threads)?;
     let start = Instant::now();
     let scene = load_scene(args.scene.as_deref())?;
@@ -135,17 +215,26 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         method: match args.method {
             MethodArg::Brute => Method::Brute,
             MethodArg::BruteUnshadowed => Method::BruteUnshadowed,
+            MethodArg::Lgh => Method::Lgh,
+            MethodArg::LghUnshadowed => Method::LghUnshadowed,
         },
         component: match args.component {
             ComponentArg::All => Component::All,
             ComponentArg::Direct => Component::Direct,
             ComponentArg::Indirect => Component::Indirect,
         },
+        lgh,
         ..RenderSettings::default()
     };
     let bars = Bars::new(args.quiet);
-    let frame = render_frame(&world, &settings, &bars);
+    let frame = render_frame(&world, &settings, &bars)?;
     frame.image.save(&args.out, exposure)?;
+    if let (Some(path), Some(stats)) = (&args.heatmap, &frame.lgh) {
+        let max = crate::heatmap::write(path, settings.width, settings.height, &stats.overdraw)?;
+        if !args.quiet {
+            eprintln!("heatmap: 0 (bottom of the bar) to {max} lights per pixel (top)");
+        }
+    }
 
     let mut timings = serde_json::Map::new();
     timings.insert("scene_load".into(), load_ms.into());
@@ -155,7 +244,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         timings.insert(name.clone(), ms.into());
     }
     if let Some(path) = &args.stats {
-        let stats = serde_json::json!({
+        let mut stats = serde_json::json!({
             "scene": scene_name,
             "width": settings.width,
             "height": settings.height,
@@ -169,6 +258,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             "triangles": world.accel.len(),
             "timings_ms": timings,
         });
+        if let Some(l) = &frame.lgh {
+            stats["grid_lights"] = l.grid_lights.into();
+            stats["levels"] = l.levels.into();
+            stats["avg_overdraw"] = l.avg_overdraw.into();
+            stats["shadow_rays"] = l.shadow_rays.into();
+            stats["alpha"] = f64::from(settings.lgh.alpha).into();
+            stats["shadow_samples"] = settings.lgh.shadow_samples.into();
+        }
         let text = serde_json::to_string_pretty(&stats)?;
         std::fs::write(path, text + "\n")
             .with_context(|| format!("{}: cannot write statistics", path.display()))?;

@@ -13,10 +13,13 @@ use std::time::Instant;
 
 use glam::Vec3;
 
+use lgh_core::lighting_grid::{GridBuilder, GridError};
+
 use crate::brute::render_brute;
 use crate::direct::render_direct;
 use crate::gbuffer::GBuffer;
 use crate::image::Image;
+use crate::lgh::{LghSettings, render_lgh};
 use crate::progress::Progress;
 use crate::vpl_gen::{VplSet, generate_vpls};
 use crate::world::World;
@@ -28,6 +31,10 @@ pub enum Method {
     Brute,
     /// Every pixel sums every VPL, no shadow rays.
     BruteUnshadowed,
+    /// Lighting grid hierarchy with stochastic ray-traced shadows (Lin & Yuksel 2019).
+    Lgh,
+    /// Lighting grid hierarchy without shadows.
+    LghUnshadowed,
 }
 
 impl Method {
@@ -37,6 +44,8 @@ impl Method {
         match self {
             Method::Brute => "brute",
             Method::BruteUnshadowed => "brute-unshadowed",
+            Method::Lgh => "lgh",
+            Method::LghUnshadowed => "lgh-unshadowed",
         }
     }
 }
@@ -74,6 +83,8 @@ pub struct RenderSettings {
     /// eps of the 1/(d^2 + eps^2) clamp, as a fraction of the scene's bounding-sphere radius
     /// (LGH design notes 4.3: 0.01).
     pub clamp_fraction: f32,
+    /// Settings of the `lgh` methods.
+    pub lgh: LghSettings,
 }
 
 impl Default for RenderSettings {
@@ -88,6 +99,7 @@ impl Default for RenderSettings {
             method: Method::Brute,
             component: Component::All,
             clamp_fraction: 0.01,
+            lgh: LghSettings::default(),
         }
     }
 }
@@ -126,15 +138,49 @@ pub struct Frame {
     pub indirect: Image,
     /// The VPLs used.
     pub vpls: VplSet,
-    /// Per-pass times: `gbuffer`, `vpl_generation`, `direct`, `indirect`, `total`.
+    /// Per-pass times: `gbuffer`, `vpl_generation`, `direct`, `indirect`, `total`; the `lgh`
+    /// methods add `lgh_build`, `lighting`, `shadow_rays`, `shadow_filter`, `composite`
+    /// (parts of `indirect`).
     pub timings: Timings,
+    /// Statistics of the `lgh` methods.
+    pub lgh: Option<LghStats>,
+}
+
+/// Statistics of an `lgh` frame (the paper's Table 3 and Fig. 5).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LghStats {
+    /// Grid lights in the hierarchy.
+    pub grid_lights: usize,
+    /// l_max.
+    pub levels: u32,
+    /// Mean overdraw over pixels that see a surface.
+    pub avg_overdraw: f64,
+    /// Per-pixel overdraw.
+    pub overdraw: Vec<u32>,
+    /// Shadow rays traced.
+    pub shadow_rays: u64,
+}
+
+/// A frame that could not be rendered.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The VPLs could not form a lighting grid hierarchy.
+    #[error("lighting grid hierarchy: {0}")]
+    Grid(#[from] GridError),
 }
 
 /// Renders one frame of `world` (see the module docs for the passes).
-#[must_use]
-pub fn render_frame(world: &World, s: &RenderSettings, progress: &dyn Progress) -> Frame {
+///
+/// # Errors
+/// The `lgh` methods fail if the VPLs cannot form a hierarchy (non-finite values).
+pub fn render_frame(
+    world: &World,
+    s: &RenderSettings,
+    progress: &dyn Progress,
+) -> Result<Frame, RenderError> {
     let start = Instant::now();
     let mut t = Timings::default();
+    let mut sub_timings = Vec::new();
     let (w, h) = (s.width, s.height);
     let camera = world.scene.camera().frame(w, h);
     let g = t.time("gbuffer", || GBuffer::render(world, &camera, w, h));
@@ -145,10 +191,37 @@ pub fn render_frame(world: &World, s: &RenderSettings, progress: &dyn Progress) 
         render_direct(world, &g, s.seed, s.area_samples, progress)
     });
     let eps = s.clamp_fraction * world.radius;
-    let indirect = t.time("indirect", || match s.method {
-        Method::Brute => render_brute(world, &g, &vpls.vpls, eps, true, progress),
-        Method::BruteUnshadowed => render_brute(world, &g, &vpls.vpls, eps, false, progress),
-    });
+    let mut lgh_stats = None;
+    let indirect = t.time("indirect", || -> Result<Vec<Vec3>, RenderError> {
+        Ok(match s.method {
+            Method::Brute => render_brute(world, &g, &vpls.vpls, eps, true, progress),
+            Method::BruteUnshadowed => render_brute(world, &g, &vpls.vpls, eps, false, progress),
+            Method::Lgh | Method::LghUnshadowed => {
+                let out = render_lgh(
+                    world,
+                    &g,
+                    &camera,
+                    &vpls.vpls,
+                    eps,
+                    &s.lgh,
+                    s.seed,
+                    s.method == Method::Lgh,
+                    &mut GridBuilder::default(),
+                )?;
+                let hits = (0..g.len()).filter(|&i| g.is_hit(i)).count().max(1);
+                lgh_stats = Some(LghStats {
+                    grid_lights: out.grid_lights,
+                    levels: out.levels,
+                    avg_overdraw: out.overdraw.iter().map(|&o| f64::from(o)).sum::<f64>()
+                        / hits as f64,
+                    overdraw: out.overdraw,
+                    shadow_rays: out.shadow_rays,
+                });
+                sub_timings = out.timings.0;
+                out.indirect
+            }
+        })
+    })?;
     let emission = Image::from_pixels(w, h, g.emission.clone());
     let direct = Image::from_pixels(w, h, direct);
     let indirect = Image::from_pixels(w, h, indirect);
@@ -166,13 +239,15 @@ pub fn render_frame(world: &World, s: &RenderSettings, progress: &dyn Progress) 
             })
             .collect::<Vec<Vec3>>(),
     );
+    t.0.extend(sub_timings);
     t.0.push(("total".into(), start.elapsed().as_secs_f64() * 1e3));
-    Frame {
+    Ok(Frame {
         image,
         emission,
         direct,
         indirect,
         vpls,
         timings: t,
-    }
+        lgh: lgh_stats,
+    })
 }

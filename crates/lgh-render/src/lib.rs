@@ -12,6 +12,9 @@
 //! | [`direct`] | direct lighting with exact shadow rays |
 //! | [`vpl_gen`] | VPLs by light tracing |
 //! | [`brute`] | the brute-force many-lights reference |
+//! | [`lgh`] | lighting grid hierarchy rendering: tiled lighting, shadow selection, ratio estimator |
+//! | [`tiles`] | screen-tile binning of light volumes (shared by the tiled methods) |
+//! | [`atrous`] | edge-avoiding a-trous filter |
 //! | [`frame`] | the passes in order, with timings |
 //! | [`image`], [`tonemap`], [`metrics`] | EXR/PNG files, tone mapping, image differences |
 //! | [`raybench`] | ray throughput measurement |
@@ -25,21 +28,24 @@
 )]
 
 pub mod accel;
+pub mod atrous;
 pub mod brute;
 pub mod direct;
 pub mod frame;
 pub mod gbuffer;
 pub mod image;
+pub mod lgh;
 pub mod lights;
 pub mod metrics;
 pub mod passes;
 pub mod progress;
 pub mod raybench;
+pub mod tiles;
 pub mod tonemap;
 pub mod vpl_gen;
 pub mod world;
 
-pub use frame::{Component, Frame, Method, RenderSettings, render_frame};
+pub use frame::{Component, Frame, LghStats, Method, RenderError, RenderSettings, render_frame};
 pub use image::Image;
 pub use progress::{Progress, Silent};
 pub use world::World;

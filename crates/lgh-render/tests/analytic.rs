@@ -34,7 +34,7 @@ fn plane_under_point_light_matches_analytic_irradiance() {
         method: Method::BruteUnshadowed,
         ..RenderSettings::default()
     };
-    let frame = render_frame(&world, &settings, &Silent);
+    let frame = render_frame(&world, &settings, &Silent).unwrap();
     let g = GBuffer::render(&world, &world.scene.camera().frame(48, 32), 48, 32);
     let mut checked = 0;
     for i in 0..g.len() {

@@ -33,6 +33,7 @@ fn doubling_vpls_halves_the_variance() {
             },
             &Silent,
         )
+        .unwrap()
         .image
     };
     let reference = render(64_000, 1000);

@@ -23,7 +23,7 @@ fn one_and_two_threads_give_identical_images() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| render_frame(&world, &settings, &Silent))
+            .install(|| render_frame(&world, &settings, &Silent).unwrap())
     };
     let a = run(1);
     let b = run(2);
@@ -39,6 +39,7 @@ fn one_and_two_threads_give_identical_images() {
             ..settings.clone()
         },
         &Silent,
-    );
+    )
+    .unwrap();
     assert_ne!(a.indirect, c.indirect);
 }

@@ -244,8 +244,12 @@ fn gltf_and_obj_versions_render_the_same_image() {
         method: Method::Brute,
         ..RenderSettings::default()
     };
-    let a = render_frame(&World::new(obj), &settings, &Silent).image;
-    let b = render_frame(&World::new(gltf), &settings, &Silent).image;
+    let a = render_frame(&World::new(obj), &settings, &Silent)
+        .unwrap()
+        .image;
+    let b = render_frame(&World::new(gltf), &settings, &Silent)
+        .unwrap()
+        .image;
     let m = diff(&a, &b).unwrap();
     assert!(m.rel_rmse < 1e-4, "{m:?}");
     // The checker texture shows: the floor has blue and white pixels.

@@ -30,7 +30,7 @@ fn every_shared_scene_loads_and_renders() {
             area_samples: 2,
             ..RenderSettings::default()
         };
-        let frame = render_frame(&world, &settings, &Silent);
+        let frame = render_frame(&world, &settings, &Silent).unwrap();
         assert!(frame.image.pixels.iter().all(|p| p.is_finite()));
         assert!(mean_luminance(&frame.indirect) > 0.0, "{}", f.display());
         assert!(mean_luminance(&frame.image) > 0.0, "{}", f.display());

@@ -1,0 +1,342 @@
+//! Rendering with the lighting grid hierarchy (Lin & Yuksel 2019, sections 3.2, 3.3, 4.1).
+//!
+//! 1. **Hierarchy** of the VPLs ([`lgh_core::lighting_grid`], section 3.1).
+//! 2. **Lighting computation** (3.2): the grid lights of levels l_min..=l_max (l_min = 1 by
+//!    default, 4.1; 0 adds the VPLs themselves as S_0 with h_0 = h_1 / 2) are binned into
+//!    screen tiles as spheres of radius 2 r_l, r_l = alpha h_l (the top level covers the whole
+//!    screen), the CPU counterpart of rasterising light volumes. Each pixel x sums, over its
+//!    tile's lights j, B_l(d_j) x Phi_j max(0, -n_j . w) max(0, n_x . w) / (pi (d^2 + eps^2))
+//!    (the unshadowed sum A), skipping lights whose blending weight is zero. The number of
+//!    lights whose sphere covers the pixel is its overdraw (Fig. 5).
+//! 3. **Shadow sample selection** (3.3, Appendix A): while shading, each pixel keeps k
+//!    single-slot reservoirs; every light of level >= the shadow level (2 by default, 4.1,
+//!    Fig. 3) is offered with weight f_j = luminance of its unshadowed contribution at a
+//!    position jittered by its deviation (q = p_j + 0.5 t * deviation, t raised-cosine per
+//!    axis; design notes 5).
+//! 4. **Shadow rays and the ratio estimator** (Heitz et al. 2018): one ray per reservoir;
+//!    U_k = f^ f_j / lum(f_j) (an unbiased estimate of the candidates' sum), S_k = V U_k;
+//!    both are averaged over k, filtered by the same edge-avoiding a-trous filter
+//!    ([`crate::atrous`]), and indirect = albedo / pi x A x D(S) / D(U) per channel (ratio 1
+//!    where D(U) is zero).
+
+use std::f32::consts::FRAC_1_PI;
+use std::time::Instant;
+
+use glam::Vec3;
+use lgh_core::blending::{LevelRole, blend};
+use lgh_core::color::luminance;
+use lgh_core::lighting_grid::{Construction, GridBuilder, GridError, InputLights, LevelCount};
+use lgh_core::reservoir::Reservoir;
+use lgh_core::rng::Rng;
+use lgh_core::sampling::raised_cosine;
+use lgh_core::vpl::{Vpls, vpl_irradiance};
+use lgh_scene::camera::CameraFrame;
+use rayon::prelude::*;
+
+use crate::atrous::{AtrousParams, filter_ratio_pair};
+use crate::frame::Timings;
+use crate::gbuffer::GBuffer;
+use crate::tiles::TileBins;
+use crate::world::World;
+
+/// Random-stream tag of the LGH lighting pass.
+const STREAM_LGH: u64 = 0x161;
+/// Most shadow samples per pixel.
+pub const MAX_SHADOW_SAMPLES: u32 = 16;
+
+/// Settings of the LGH method (command-line flags in brackets).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LghSettings {
+    /// alpha of r_l = alpha h_l (`--alpha`, default 1).
+    pub alpha: f32,
+    /// Number of levels (`--levels auto|N`).
+    pub levels: LevelCount,
+    /// Shadow samples k per pixel, 0 = no shadows (`--shadow-samples`, default 4).
+    pub shadow_samples: u32,
+    /// Lowest level whose lights are shadow candidates (`--shadow-from-level`, default 2).
+    pub shadow_from_level: u32,
+    /// Lowest level shaded: 1 (S_1, default) or 0 (the VPLs) (`--start-level`).
+    pub start_level: u32,
+    /// A-trous passes on the shadow estimates, 0 = no filter (`--filter`, `--filter-passes`).
+    pub filter_passes: u32,
+    /// Screen tile size in pixels for light binning.
+    pub tile: u32,
+    /// Scale of the shadow-sample jitter (the demo's DevScale, 0.5).
+    pub dev_scale: f32,
+    /// Construction of levels >= 2.
+    pub construction: Construction,
+}
+
+impl Default for LghSettings {
+    fn default() -> Self {
+        Self {
+            alpha: 1.0,
+            levels: LevelCount::Auto,
+            shadow_samples: 4,
+            shadow_from_level: 2,
+            start_level: 1,
+            filter_passes: 5,
+            tile: 16,
+            dev_scale: 0.5,
+            construction: Construction::GatherFromS1,
+        }
+    }
+}
+
+/// What the LGH passes produced besides the image.
+#[derive(Clone, Debug, Default)]
+pub struct LghOutput {
+    /// Indirect radiance towards the camera.
+    pub indirect: Vec<Vec3>,
+    /// Per-pixel overdraw: lights whose sphere covers the pixel.
+    pub overdraw: Vec<u32>,
+    /// Grid lights in the hierarchy (all levels).
+    pub grid_lights: usize,
+    /// l_max.
+    pub levels: u32,
+    /// Lights shaded (grid lights of the shaded levels, plus VPLs when starting at 0).
+    pub shaded_lights: usize,
+    /// Shadow rays traced.
+    pub shadow_rays: u64,
+    /// Per-pass times: `lgh_build`, `lighting`, `shadow_rays`, `shadow_filter`, `composite`.
+    pub timings: Timings,
+}
+
+/// The lights a pixel may see, structure-of-arrays.
+struct ShadeLights {
+    position: Vec<Vec3>,
+    normal: Vec<Vec3>,
+    intensity: Vec<Vec3>,
+    deviation: Vec<Vec3>,
+    level: Vec<u8>,
+}
+
+/// A held shadow sample: jittered position, the light's mean normal (the ray's end is moved
+/// off the surface along it, as for VPLs in the brute force) and the unshadowed contribution.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct ShadowSample {
+    q: Vec3,
+    n: Vec3,
+    f: Vec3,
+}
+
+/// Renders the indirect light of `vpls` with the lighting grid hierarchy. With
+/// `shadows == false` (method `lgh-unshadowed`) no sample is selected and no ray traced.
+///
+/// # Errors
+/// The VPLs cannot form a hierarchy (non-finite values).
+#[allow(clippy::too_many_arguments)]
+pub fn render_lgh(
+    world: &World,
+    g: &GBuffer,
+    frame: &CameraFrame,
+    vpls: &Vpls,
+    eps: f32,
+    settings: &LghSettings,
+    seed: u64,
+    shadows: bool,
+    builder: &mut GridBuilder,
+) -> Result<LghOutput, GridError> {
+    let mut t = Timings::default();
+    let n_px = g.len();
+    let mut out = LghOutput {
+        indirect: vec![Vec3::ZERO; n_px],
+        overdraw: vec![0; n_px],
+        ..LghOutput::default()
+    };
+    if vpls.is_empty() {
+        return Ok(out);
+    }
+    let input = InputLights {
+        positions: &vpls.positions,
+        intensity: &vpls.flux,
+        normals: Some(&vpls.normals),
+    };
+    t.time("lgh_build", || {
+        builder.build(&input, settings.levels, settings.construction)
+    })?;
+    let Some(grid) = builder.grid() else {
+        return Ok(out);
+    };
+    let geom = grid.geometry;
+    let l_max = geom.l_max;
+    let lowest = settings.start_level.min(1);
+    out.grid_lights = grid.len();
+    out.levels = l_max;
+
+    let lighting_start = Instant::now();
+    // The lights of levels lowest..=l_max with their level, radius and blending role.
+    let mut lights = ShadeLights {
+        position: Vec::new(),
+        normal: Vec::new(),
+        intensity: Vec::new(),
+        deviation: Vec::new(),
+        level: Vec::new(),
+    };
+    if lowest == 0 {
+        lights.position.extend_from_slice(&vpls.positions);
+        lights.normal.extend_from_slice(&vpls.normals);
+        lights.intensity.extend_from_slice(&vpls.flux);
+        lights.deviation.resize(vpls.len(), Vec3::ZERO);
+        lights.level.resize(vpls.len(), 0);
+    }
+    for l in 1..=l_max {
+        let r = grid.level_range(l);
+        lights.position.extend_from_slice(&grid.position[r.clone()]);
+        lights.normal.extend_from_slice(&grid.normal[r.clone()]);
+        lights
+            .intensity
+            .extend_from_slice(&grid.intensity[r.clone()]);
+        lights
+            .deviation
+            .extend_from_slice(&grid.deviation[r.clone()]);
+        lights.level.extend(std::iter::repeat_n(l as u8, r.len()));
+    }
+    out.shaded_lights = lights.position.len();
+    let radius: Vec<f32> = (0..=l_max)
+        .map(|l| geom.radius(l, settings.alpha))
+        .collect();
+    let role: Vec<LevelRole> = (0..=l_max)
+        .map(|l| LevelRole::of(l, lowest, l_max))
+        .collect();
+    let reach: Vec<f32> = (0..=l_max)
+        .map(|l| role[l as usize].reach(radius[l as usize]))
+        .collect();
+    let light_reach: Vec<f32> = lights.level.iter().map(|&l| reach[l as usize]).collect();
+    let bins = TileBins::build(g, frame, settings.tile, &lights.position, &light_reach);
+
+    let k = if shadows {
+        settings.shadow_samples.min(MAX_SHADOW_SAMPLES) as usize
+    } else {
+        0
+    };
+    let eps2 = eps * eps;
+    let w = g.width as usize;
+    // Per pixel: A, overdraw, and k reservoirs.
+    type PixelOut = (
+        Vec3,
+        u32,
+        [Reservoir<ShadowSample>; MAX_SHADOW_SAMPLES as usize],
+    );
+    let mut shaded: Vec<PixelOut> = vec![
+        (
+            Vec3::ZERO,
+            0,
+            [Reservoir::new(); MAX_SHADOW_SAMPLES as usize]
+        );
+        n_px
+    ];
+    shaded.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, px) in row.iter_mut().enumerate() {
+            let i = y * w + x;
+            if !g.is_hit(i) {
+                continue;
+            }
+            let (xp, n) = (g.position[i], g.normal[i]);
+            let mut rng = Rng::new(&[seed, i as u64, STREAM_LGH]);
+            let (a, overdraw, res) = px;
+            for &j in bins.lights_at(x as u32, y as u32) {
+                let j = j as usize;
+                let l = lights.level[j] as usize;
+                let p = lights.position[j];
+                let d = (p - xp).length();
+                if d >= reach[l] {
+                    continue;
+                }
+                *overdraw += 1;
+                let b = blend(role[l], d, radius[l]);
+                if b <= 0.0 {
+                    continue;
+                }
+                let (nj, ij) = (lights.normal[j], lights.intensity[j]);
+                let c = vpl_irradiance(xp, n, p, nj, ij, eps2);
+                if c == Vec3::ZERO {
+                    continue;
+                }
+                *a += b * c;
+                if k > 0 && l as u32 >= settings.shadow_from_level {
+                    let dev = lights.deviation[j] * settings.dev_scale;
+                    let t = Vec3::new(
+                        raised_cosine(rng.next_2d()),
+                        raised_cosine(rng.next_2d()),
+                        raised_cosine(rng.next_2d()),
+                    );
+                    let q = p + t * dev;
+                    let f = b * vpl_irradiance(xp, n, q, nj, ij, eps2);
+                    let lum = luminance(f);
+                    for r in res.iter_mut().take(k) {
+                        r.update(ShadowSample { q, n: nj, f }, lum, rng.next_f32());
+                    }
+                }
+            }
+        }
+    });
+    out.overdraw = shaded.iter().map(|p| p.1).collect();
+    t.0.push((
+        "lighting".into(),
+        lighting_start.elapsed().as_secs_f64() * 1e3,
+    ));
+
+    let albedo_pi = |i: usize| g.albedo[i] * FRAC_1_PI;
+    if k == 0 {
+        t.time("composite", || {
+            out.indirect = (0..n_px).map(|i| albedo_pi(i) * shaded[i].0).collect();
+        });
+        out.timings = t;
+        return Ok(out);
+    }
+
+    // Shadow rays: S_hat and U_hat per pixel.
+    let (s_hat, u_hat): (Vec<Vec3>, Vec<Vec3>) = t.time("shadow_rays", || {
+        (0..n_px)
+            .into_par_iter()
+            .map(|i| {
+                if !g.is_hit(i) {
+                    return (Vec3::ZERO, Vec3::ZERO);
+                }
+                let (xp, ng) = (g.position[i], g.geo_normal[i]);
+                let (mut s, mut u) = (Vec3::ZERO, Vec3::ZERO);
+                for r in shaded[i].2.iter().take(k) {
+                    let Some(sample) = r.sample else { continue };
+                    let u_k = sample.f * (r.total / r.weight);
+                    let visible =
+                        !world.occluded_between(xp, ng, sample.q, sample.n.normalize_or_zero());
+                    u += u_k;
+                    if visible {
+                        s += u_k;
+                    }
+                }
+                (s / k as f32, u / k as f32)
+            })
+            .unzip()
+    });
+    out.shadow_rays = shaded
+        .iter()
+        .map(|p| p.2.iter().take(k).filter(|r| r.sample.is_some()).count() as u64)
+        .sum();
+    let (s_f, u_f) = t.time("shadow_filter", || {
+        if settings.filter_passes > 0 {
+            let params = AtrousParams {
+                passes: settings.filter_passes,
+                ..AtrousParams::lgh_defaults(world.radius)
+            };
+            filter_ratio_pair(&s_hat, &u_hat, g, &params)
+        } else {
+            (s_hat, u_hat)
+        }
+    });
+    t.time("composite", || {
+        out.indirect = (0..n_px)
+            .map(|i| {
+                let ratio = Vec3::select(
+                    u_f[i].cmpgt(Vec3::splat(1e-20)),
+                    (s_f[i] / u_f[i]).clamp(Vec3::ZERO, Vec3::ONE),
+                    Vec3::ONE,
+                );
+                albedo_pi(i) * shaded[i].0 * ratio
+            })
+            .collect();
+    });
+    out.timings = t;
+    Ok(out)
+}

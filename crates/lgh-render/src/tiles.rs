@@ -1,0 +1,151 @@
+//! Screen-tile binning of light volumes: the CPU counterpart of rasterising light spheres
+//! over the G-buffer (LGH 2019 section 3.2; Tokuyoshi & Harada 2016 Algorithm 1).
+//!
+//! The image is cut into square tiles; each tile knows the depth range of the surfaces it
+//! sees. A light whose influence is a sphere (centre, radius) is listed in every tile that its
+//! projected bounding rectangle covers and whose depth range meets the sphere's; a light with
+//! infinite radius is listed everywhere. Lists keep the lights' order, so shading that walks
+//! them is deterministic. One binning module serves every tiled method.
+
+use glam::Vec3;
+use lgh_scene::camera::CameraFrame;
+
+use crate::gbuffer::GBuffer;
+
+/// Lights binned into screen tiles, as a compressed sparse row table.
+#[derive(Clone, Debug, Default)]
+pub struct TileBins {
+    /// Tile edge in pixels.
+    pub tile: u32,
+    /// Tiles per row.
+    pub tiles_x: u32,
+    /// Tiles per column.
+    pub tiles_y: u32,
+    /// Tile t's lights are `lights[offsets[t]..offsets[t + 1]]`, in ascending light order.
+    pub offsets: Vec<u32>,
+    /// Light indices.
+    pub lights: Vec<u32>,
+}
+
+impl TileBins {
+    /// The lights listed in the tile that holds pixel (x, y).
+    #[inline]
+    #[must_use]
+    pub fn lights_at(&self, x: u32, y: u32) -> &[u32] {
+        let t = (y / self.tile * self.tiles_x + x / self.tile) as usize;
+        &self.lights[self.offsets[t] as usize..self.offsets[t + 1] as usize]
+    }
+
+    /// Bins spheres (`centres[i]`, `radii[i]`; infinite radius = everywhere) into tiles of
+    /// `tile` pixels over the G-buffer `g` seen through `frame`.
+    #[must_use]
+    pub fn build(
+        g: &GBuffer,
+        frame: &CameraFrame,
+        tile: u32,
+        centres: &[Vec3],
+        radii: &[f32],
+    ) -> Self {
+        let tile = tile.max(1);
+        let tiles_x = g.width.div_ceil(tile);
+        let tiles_y = g.height.div_ceil(tile);
+        let n_tiles = (tiles_x * tiles_y) as usize;
+        // Depth range of each tile (empty range where the tile sees nothing).
+        let mut zmin = vec![f32::INFINITY; n_tiles];
+        let mut zmax = vec![f32::NEG_INFINITY; n_tiles];
+        for y in 0..g.height {
+            for x in 0..g.width {
+                let i = (y * g.width + x) as usize;
+                if g.is_hit(i) {
+                    let t = (y / tile * tiles_x + x / tile) as usize;
+                    zmin[t] = zmin[t].min(g.depth[i]);
+                    zmax[t] = zmax[t].max(g.depth[i]);
+                }
+            }
+        }
+        let rects: Vec<Option<[u32; 4]>> = centres
+            .iter()
+            .zip(radii)
+            .map(|(&c, &r)| {
+                screen_rect(frame, g.width, g.height, c, r)
+                    .map(|[x0, y0, x1, y1]| [x0 / tile, y0 / tile, x1 / tile, y1 / tile])
+            })
+            .collect();
+        let depth = |i: usize| {
+            let z = (centres[i] - frame.origin).dot(frame.forward);
+            (z - radii[i], z + radii[i])
+        };
+        let mut counts = vec![0u32; n_tiles + 1];
+        let visit = |f: &mut dyn FnMut(usize, usize)| {
+            for (i, r) in rects.iter().enumerate() {
+                let Some([tx0, ty0, tx1, ty1]) = *r else {
+                    continue;
+                };
+                let (lo, hi) = depth(i);
+                for ty in ty0..=ty1 {
+                    for tx in tx0..=tx1 {
+                        let t = (ty * tiles_x + tx) as usize;
+                        if zmin[t] <= hi && zmax[t] >= lo {
+                            f(t, i);
+                        }
+                    }
+                }
+            }
+        };
+        visit(&mut |t, _| counts[t + 1] += 1);
+        for t in 0..n_tiles {
+            counts[t + 1] += counts[t];
+        }
+        let mut next = counts.clone();
+        let mut lights = vec![0u32; counts[n_tiles] as usize];
+        visit(&mut |t, i| {
+            lights[next[t] as usize] = i as u32;
+            next[t] += 1;
+        });
+        Self {
+            tile,
+            tiles_x,
+            tiles_y,
+            offsets: counts,
+            lights,
+        }
+    }
+}
+
+/// The pixel rectangle [x0, y0, x1, y1] (inclusive) covered by the sphere (c, r), or `None`
+/// if it is off screen. Conservative: the projection of the sphere's bounding box; a sphere
+/// reaching behind the eye, or of infinite radius, covers the whole image.
+#[must_use]
+pub fn screen_rect(
+    frame: &CameraFrame,
+    width: u32,
+    height: u32,
+    c: Vec3,
+    r: f32,
+) -> Option<[u32; 4]> {
+    let full = Some([0, 0, width - 1, height - 1]);
+    if !r.is_finite() {
+        return full;
+    }
+    let (mut lo_x, mut lo_y, mut hi_x, mut hi_y) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
+    for k in 0..8 {
+        let corner = c + Vec3::new(
+            if k & 1 == 0 { -r } else { r },
+            if k & 2 == 0 { -r } else { r },
+            if k & 4 == 0 { -r } else { r },
+        );
+        let Some((p, _)) = frame.project(corner).filter(|&(_, z)| z > 1e-6) else {
+            return full;
+        };
+        lo_x = lo_x.min(p.x);
+        lo_y = lo_y.min(p.y);
+        hi_x = hi_x.max(p.x);
+        hi_y = hi_y.max(p.y);
+    }
+    if hi_x < 0.0 || hi_y < 0.0 || lo_x >= width as f32 || lo_y >= height as f32 {
+        return None;
+    }
+    let clamp_x = |v: f32| (v.max(0.0) as u32).min(width - 1);
+    let clamp_y = |v: f32| (v.max(0.0) as u32).min(height - 1);
+    Some([clamp_x(lo_x), clamp_y(lo_y), clamp_x(hi_x), clamp_y(hi_y)])
+}
