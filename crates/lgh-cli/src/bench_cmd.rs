@@ -26,6 +26,10 @@ pub enum BenchWhat {
     /// Lighting grid hierarchy construction (LGH paper Table 1): per-step times, levels and
     /// lights per level, for the paper's gather-from-S1 method and the all-scatter variant.
     Build(BuildArgs),
+    /// LGH rendering (LGH paper Tables 2 and 3): VPL generation, hierarchy construction, and
+    /// render times without shadows, with 1 and with 4 shadow samples, with the per-pass
+    /// breakdown.
+    Render(crate::bench_render::RenderBenchArgs),
 }
 
 /// Arguments of `lgh bench rays`.
@@ -48,6 +52,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     match &args.what {
         BenchWhat::Rays(a) => rays(a),
         BenchWhat::Build(a) => crate::bench_build::run(a),
+        BenchWhat::Render(a) => crate::bench_render::run(a),
     }
 }
 

@@ -9,6 +9,7 @@
 
 mod bench_build;
 mod bench_cmd;
+mod bench_render;
 mod diff_cmd;
 mod heatmap;
 mod progress_bar;

@@ -254,3 +254,71 @@ fn bench_build_reports_the_paper_table_as_json() {
     );
     assert_error(&lgh(&["bench", "build", "--lights", "0"]), &["--lights"]);
 }
+
+#[test]
+fn lgh_render_writes_stats_and_heatmap_and_bench_render_reports_tables() {
+    let d = temp_dir("lgh");
+    let (png, heat, stats) = (d.join("l.png"), d.join("h.png"), d.join("s.json"));
+    let out = lgh(&[
+        "render",
+        "--method",
+        "lgh",
+        "--size",
+        "48x32",
+        "--vpls",
+        "2000",
+        "--out",
+        s(&png),
+        "--heatmap",
+        s(&heat),
+        "--stats",
+        s(&stats),
+        "-q",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(png.is_file() && heat.is_file());
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    for key in ["grid_lights", "levels", "avg_overdraw", "shadow_rays"] {
+        assert!(v.get(key).is_some(), "missing {key}");
+    }
+    for key in [
+        "lgh_build",
+        "lighting",
+        "shadow_rays",
+        "shadow_filter",
+        "composite",
+    ] {
+        assert!(v["timings_ms"][key].is_f64(), "missing timings_ms.{key}");
+    }
+    let out = lgh(&[
+        "bench", "render", "--vpls", "500", "--size", "32x24", "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let b: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let row = &b["rows"][0];
+    for k in ["shadow_samples_0", "shadow_samples_1", "shadow_samples_4"] {
+        assert!(row["runs"][k]["render_ms"].is_f64(), "missing {k}");
+    }
+    assert_error(
+        &lgh(&["render", "--method", "lgh", "--alpha=-1"]),
+        &["--alpha"],
+    );
+    assert_error(
+        &lgh(&["render", "--method", "lgh", "--shadow-samples", "99"]),
+        &["--shadow-samples"],
+    );
+    assert_error(
+        &lgh(&["render", "--method", "lgh", "--start-level", "3"]),
+        &["--start-level"],
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -1,0 +1,156 @@
+//! `lgh bench render`: the LGH paper's Tables 2 and 3 on this machine.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Result;
+use clap::Args;
+use lgh_core::lighting_grid::GridBuilder;
+use lgh_render::World;
+use lgh_render::gbuffer::GBuffer;
+use lgh_render::lgh::{LghSettings, render_lgh};
+use lgh_render::vpl_gen::generate_vpls;
+
+use crate::render_cmd::parse_size;
+use crate::scene_arg::load_scene;
+
+/// Arguments of `lgh bench render`.
+#[derive(Debug, Args)]
+pub struct RenderBenchArgs {
+    /// Scene file (.toml, .gltf, .glb, .obj). Default: the built-in Cornell box.
+    pub scene: Option<PathBuf>,
+    /// VPL counts, comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "1000,10000,100000,1000000"
+    )]
+    pub vpls: Vec<usize>,
+    /// Image size, WIDTHxHEIGHT (the paper uses 1280x720).
+    #[arg(long, default_value = "640x360", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// alpha of the blending radii.
+    #[arg(long, default_value_t = 1.0)]
+    pub alpha: f32,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Print one JSON object {rows: [...]} instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: &RenderBenchArgs) -> Result<()> {
+    let threads = crate::set_threads(args.threads)?;
+    let scene = load_scene(args.scene.as_deref())?;
+    let name = scene.name.clone();
+    let world = World::new(scene);
+    let (w, h) = args.size;
+    let frame = world.scene.camera().frame(w, h);
+    let t = Instant::now();
+    let g = GBuffer::render(&world, &frame, w, h);
+    let gbuffer_ms = t.elapsed().as_secs_f64() * 1e3;
+    let eps = 0.01 * world.radius;
+    let mut rows = Vec::new();
+    for &n in &args.vpls {
+        let t = Instant::now();
+        let set = generate_vpls(&world, n, 3, 0);
+        let vpl_ms = t.elapsed().as_secs_f64() * 1e3;
+        let mut builder = GridBuilder::default();
+        let mut per_k = serde_json::Map::new();
+        let mut build_ms = 0.0;
+        for k in [0u32, 1, 4] {
+            let settings = LghSettings {
+                alpha: args.alpha,
+                shadow_samples: k,
+                ..LghSettings::default()
+            };
+            let start = Instant::now();
+            let out = render_lgh(
+                &world,
+                &g,
+                &frame,
+                &set.vpls,
+                eps,
+                &settings,
+                0,
+                k > 0,
+                &mut builder,
+            )?;
+            let total = start.elapsed().as_secs_f64() * 1e3;
+            let get = |name: &str| out.timings.get(name).unwrap_or(0.0);
+            build_ms = get("lgh_build");
+            per_k.insert(
+                format!("shadow_samples_{k}"),
+                serde_json::json!({
+                    "lighting_ms": get("lighting"),
+                    "shadow_rays_ms": get("shadow_rays"),
+                    "shadow_filter_ms": get("shadow_filter"),
+                    "composite_ms": get("composite"),
+                    "render_ms": total - build_ms,
+                    "avg_overdraw": out.overdraw.iter().map(|&o| f64::from(o)).sum::<f64>()
+                        / (0..g.len()).filter(|&i| g.is_hit(i)).count().max(1) as f64,
+                    "grid_lights": out.grid_lights,
+                    "levels": out.levels,
+                }),
+            );
+        }
+        rows.push(serde_json::json!({
+            "vpls": set.vpls.len(),
+            "vpl_generation_ms": vpl_ms,
+            "lgh_build_ms": build_ms,
+            "gbuffer_ms": gbuffer_ms,
+            "runs": per_k,
+        }));
+    }
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({"scene": name, "width": w, "height": h, "threads": threads, "alpha": args.alpha, "rows": rows})
+        );
+        return Ok(());
+    }
+    println!(
+        "LGH render times on {name}, {w}x{h}, alpha {}, {threads} threads (ms)",
+        args.alpha
+    );
+    println!(
+        "\nTable 2: {:>9} {:>9} {:>9} {:>11} {:>11} {:>11}",
+        "VPLs", "VPL gen", "LGH build", "no shadows", "1 shadow", "4 shadows"
+    );
+    for r in &rows {
+        let t = |k: u32| {
+            r["runs"][format!("shadow_samples_{k}")]["render_ms"]
+                .as_f64()
+                .unwrap_or(0.0)
+        };
+        println!(
+            "         {:>9} {:>9.1} {:>9.1} {:>11.1} {:>11.1} {:>11.1}",
+            r["vpls"],
+            r["vpl_generation_ms"].as_f64().unwrap_or(0.0),
+            r["lgh_build_ms"].as_f64().unwrap_or(0.0),
+            t(0),
+            t(1),
+            t(4)
+        );
+    }
+    println!(
+        "\nTable 3 (4 shadow samples): {:>9} {:>9} {:>9} {:>11} {:>11} {:>10} {:>9}",
+        "VPLs", "G-buffer", "lighting", "shadow rays", "shadow filt", "composite", "overdraw"
+    );
+    for r in &rows {
+        let k = &r["runs"]["shadow_samples_4"];
+        let f = |key: &str| k[key].as_f64().unwrap_or(0.0);
+        println!(
+            "                            {:>9} {:>9.1} {:>9.1} {:>11.1} {:>11.1} {:>10.1} {:>9.1}",
+            r["vpls"],
+            gbuffer_ms,
+            f("lighting_ms"),
+            f("shadow_rays_ms"),
+            f("shadow_filter_ms"),
+            f("composite_ms"),
+            f("avg_overdraw")
+        );
+    }
+    Ok(())
+}
