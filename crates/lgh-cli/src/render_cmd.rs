@@ -103,6 +103,10 @@ pub struct RenderArgs {
     /// lgh: lowest level shaded: 1 (S1, the paper's default) or 0 (the VPLs themselves).
     #[arg(long, default_value_t = 1)]
     pub start_level: u32,
+    /// lgh: build six hierarchies, one per dominant normal direction of the VPLs (an extension
+    /// of the paper: grid lights then average only normals that roughly agree).
+    #[arg(long)]
+    pub normal_bins: bool,
     /// lgh: write the per-pixel overdraw (lights covering each pixel) as a colour map with a
     /// legend bar to this PNG (the paper's Fig. 5).
     #[arg(long)]
@@ -168,6 +172,7 @@ fn lgh_settings(args: &RenderArgs) -> Result<LghSettings> {
             FilterArg::Atrous => args.filter_passes,
             FilterArg::None => 0,
         },
+        normal_bins: args.normal_bins,
         ..LghSettings::default()
     })
 }

@@ -300,3 +300,34 @@ fn atrous_keeps_constants_and_edges() {
     }
     assert!(checked > 500, "{checked}");
 }
+
+/// Six hierarchies split by normal direction (`--normal-bins`) average only normals that
+/// roughly agree, and come closer to the brute force than one hierarchy. Measured on this
+/// box (4000 VPLs, 48x32, unshadowed, alpha 2): rel_rmse 0.33 with one hierarchy, 0.13 with six.
+#[test]
+fn normal_bins_reduce_the_error_of_the_hierarchy() {
+    let world = cornell();
+    let reference = render(
+        &world,
+        Method::BruteUnshadowed,
+        4000,
+        LghSettings::default(),
+    )
+    .image;
+    let err = |normal_bins: bool| {
+        let lgh = LghSettings {
+            alpha: 2.0,
+            normal_bins,
+            ..LghSettings::default()
+        };
+        diff(
+            &render(&world, Method::LghUnshadowed, 4000, lgh).image,
+            &reference,
+        )
+        .unwrap()
+        .rel_rmse
+    };
+    let (one, six) = (err(false), err(true));
+    eprintln!("rel_rmse one hierarchy {one}, six {six}");
+    assert!(six < 0.8 * one, "{one} {six}");
+}
