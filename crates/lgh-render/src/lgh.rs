@@ -129,10 +129,10 @@ impl ShadeLights {
         let geom = grid.geometry;
         let l_max = geom.l_max;
         for l in lowest..=l_max {
-            let (p, n, i, d): (&[Vec3], &[Vec3], &[Vec3], Option<&[Vec3]>) = if l == 0 {
-                (&vpls.positions, &vpls.normals, &vpls.flux, None)
+            let r = if l == 0 { 0..0 } else { grid.level_range(l) };
+            let (p, n, i, d) = if l == 0 {
+                (&vpls.positions[..], &vpls.normals[..], &vpls.flux[..], None)
             } else {
-                let r = grid.level_range(l);
                 (
                     &grid.position[r.clone()],
                     &grid.normal[r.clone()],
