@@ -256,3 +256,66 @@ fn gltf_and_obj_versions_render_the_same_image() {
     assert!(b.pixels.iter().any(|p| p.z > 2.0 * p.x && p.z > 0.01));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A glTF camera node and `KHR_lights_punctual` lights are used, placed by their node
+/// transforms (cameras and lights look along their local -z).
+#[test]
+fn gltf_camera_and_punctual_lights_are_loaded() {
+    let dir = temp_dir("gltf-camera");
+    write_texture(&dir);
+    let path = write_gltf(&dir, &scene_quads());
+    let text = std::fs::read_to_string(&path).unwrap();
+    // Node 1: a camera at (0, 2, 6) (translation only: looks along -z); node 2: a point light;
+    // node 3: a spot light rotated to look down (-90 degrees about x).
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    let text = text
+        .replace(
+            r#""nodes":[{"mesh":0}]"#,
+            &format!(
+                r#""nodes":[{{"mesh":0}},{{"camera":0,"translation":[0,2,6]}},{{"translation":[1,2.5,0],"extensions":{{"KHR_lights_punctual":{{"light":0}}}}}},{{"translation":[0,2.8,0],"rotation":[{},0,0,{}],"extensions":{{"KHR_lights_punctual":{{"light":1}}}}}}]"#,
+                -s, s
+            ),
+        )
+        .replace(r#""scenes":[{"nodes":[0]}]"#, r#""scenes":[{"nodes":[0,1,2,3]}]"#)
+        .replace(
+            r#""extensionsUsed":["KHR_materials_emissive_strength"]"#,
+            r#""extensionsUsed":["KHR_materials_emissive_strength","KHR_lights_punctual"],
+"cameras":[{"type":"perspective","perspective":{"yfov":0.8,"znear":0.1}}],
+"extensions":{"KHR_lights_punctual":{"lights":[{"type":"point","color":[1,0.5,0.25],"intensity":4},{"type":"spot","intensity":10,"spot":{"innerConeAngle":0.2,"outerConeAngle":0.5}}]}}"#,
+        );
+    std::fs::write(&path, text).unwrap();
+    let scene = lgh_scene::load(&path).unwrap();
+    let cam = scene.camera.clone().unwrap();
+    assert!((cam.position - Vec3::new(0.0, 2.0, 6.0)).length() < 1e-5);
+    assert!(((cam.look_at - cam.position).normalize() - Vec3::NEG_Z).length() < 1e-5);
+    assert!((cam.fov_y_degrees - 0.8f32.to_degrees()).abs() < 1e-3);
+    assert_eq!(scene.lights.len(), 2);
+    let mut saw_point = false;
+    let mut saw_spot = false;
+    for l in &scene.lights {
+        match *l {
+            lgh_scene::Light::Point {
+                position,
+                intensity,
+            } => {
+                assert!((position - Vec3::new(1.0, 2.5, 0.0)).length() < 1e-5);
+                assert!((intensity - Vec3::new(4.0, 2.0, 1.0)).length() < 1e-5);
+                saw_point = true;
+            }
+            lgh_scene::Light::Spot {
+                direction,
+                cos_inner,
+                cos_outer,
+                ..
+            } => {
+                assert!((direction - Vec3::NEG_Y).length() < 1e-4, "{direction}");
+                assert!((cos_inner - 0.2f32.cos()).abs() < 1e-6);
+                assert!((cos_outer - 0.5f32.cos()).abs() < 1e-6);
+                saw_spot = true;
+            }
+            _ => {}
+        }
+    }
+    assert!(saw_point && saw_spot);
+    let _ = std::fs::remove_dir_all(&dir);
+}
