@@ -87,11 +87,18 @@ pub fn uniform_triangle(u: Vec2) -> Vec2 {
 /// This is the per-axis jitter of a grid light's shadow-sample position (LGH design notes,
 /// section 5): the offset t * deviation roughly reproduces the spread of the lights the grid
 /// light stands for.
+///
+/// cos(pi x) is evaluated as -sin(pi (x - 1/2)) by its Taylor polynomial to degree 9
+/// (absolute error below 4e-6 on [0, 1)): this runs for every shadow candidate of every pixel,
+/// and the library cosine was a tenth of the LGH lighting pass.
 #[inline]
 #[must_use]
 pub fn raised_cosine(u: Vec2) -> f32 {
     let x = u.x;
-    if u.y > 0.5 * (1.0 + (PI * x).cos()) {
+    let z = PI * (x - 0.5);
+    let z2 = z * z;
+    let sin_z = z * (1.0 - z2 / 6.0 * (1.0 - z2 / 20.0 * (1.0 - z2 / 42.0 * (1.0 - z2 / 72.0))));
+    if u.y > 0.5 * (1.0 - sin_z) {
         x - 1.0
     } else {
         x
@@ -195,6 +202,18 @@ mod tests {
 
     /// The raised-cosine density has variance 1/3 - 2/pi^2 (about 0.1307); 200k samples,
     /// tolerance 0.002 (about 6 standard errors).
+    #[test]
+    fn raised_cosine_polynomial_matches_the_cosine() {
+        for i in 0..=1000 {
+            let x = i as f32 / 1000.0;
+            let z = PI * (x - 0.5);
+            let z2 = z * z;
+            let p =
+                z * (1.0 - z2 / 6.0 * (1.0 - z2 / 20.0 * (1.0 - z2 / 42.0 * (1.0 - z2 / 72.0))));
+            assert!((-p - (PI * x).cos()).abs() < 4e-6, "x {x}");
+        }
+    }
+
     #[test]
     fn raised_cosine_variance() {
         let mut rng = Rng::new(&[9]);

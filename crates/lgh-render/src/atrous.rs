@@ -111,11 +111,14 @@ pub fn filter_ratio_pair(
                             let dc = guide[p] - guide[q];
                             let dn = g.normal[p] - g.normal[q];
                             let dx = g.position[p] - g.position[q];
+                            // w_c w_n w_x as one exponential (each exponent is <= 0, so
+                            // the clamps to 1 of the separate weights are implied).
                             let wgt = hx
                                 * hy
-                                * (-(dc * dc) / c_phi).exp().min(1.0)
-                                * (-dn.length_squared() / params.n_phi).exp().min(1.0)
-                                * (-dx.length_squared() / params.p_phi).exp().min(1.0);
+                                * (-(dc * dc) / c_phi
+                                    - dn.length_squared() / params.n_phi
+                                    - dx.length_squared() / params.p_phi)
+                                    .exp();
                             acc_s += cur_s[q] * wgt;
                             acc_u += cur_u[q] * wgt;
                             acc_w += wgt;

@@ -160,6 +160,16 @@ impl ShadeLights {
     }
 }
 
+/// Two uniform numbers in (0, 1) from the halves of 32 random bits (16 bits each: ample for
+/// a jitter or a reservoir decision, and half the generator calls of the hot loop).
+#[inline]
+fn halves(x: u32) -> glam::Vec2 {
+    glam::Vec2::new(
+        ((x & 0xffff) as f32 + 0.5) / 65536.0,
+        ((x >> 16) as f32 + 0.5) / 65536.0,
+    )
+}
+
 /// Splits VPLs into six groups by the dominant axis and sign of their normal (+x, -x, +y,
 /// -y, +z, -z), so that each hierarchy only averages normals that roughly agree.
 fn split_by_normal(vpls: &Vpls) -> Vec<Vpls> {
@@ -299,15 +309,20 @@ pub fn render_lgh(
                 if k > 0 && l as u32 >= settings.shadow_from_level {
                     let dev = lights.deviation[j] * settings.dev_scale;
                     let t = Vec3::new(
-                        raised_cosine(rng.next_2d()),
-                        raised_cosine(rng.next_2d()),
-                        raised_cosine(rng.next_2d()),
+                        raised_cosine(halves(rng.next_u32())),
+                        raised_cosine(halves(rng.next_u32())),
+                        raised_cosine(halves(rng.next_u32())),
                     );
                     let q = p + t * dev;
                     let f = b * vpl_irradiance(xp, n, q, nj, ij, eps2);
                     let lum = luminance(f);
-                    for r in res.iter_mut().take(k) {
-                        r.update(ShadowSample { q, n: nj, f }, lum, rng.next_f32());
+                    let sample = ShadowSample { q, n: nj, f };
+                    for pair in res[..k].chunks_mut(2) {
+                        let u = halves(rng.next_u32());
+                        pair[0].update(sample, lum, u.x);
+                        if let Some(r) = pair.get_mut(1) {
+                            r.update(sample, lum, u.y);
+                        }
                     }
                 }
             }
