@@ -329,3 +329,15 @@ fn reused_builder_matches_fresh_builds() {
         assert_eq!(builder.grid().unwrap(), &build(l, levels, c));
     }
 }
+
+/// Large inputs go through the chunked parallel bucketing and the chunked coarse layers:
+/// still the same hierarchy as the one-thread reference.
+#[test]
+fn large_inputs_match_the_reference() {
+    let l = synthetic(150_000, 13);
+    for c in BOTH {
+        let g = build(&l, LevelCount::Auto, c);
+        let reference = build_reference(&l.input(), g.geometry, c).unwrap();
+        assert_same(&g, &reference);
+    }
+}

@@ -192,6 +192,9 @@ pub(crate) fn corner_weight(f: Vec3, d: UVec3) -> f32 {
 /// added in chunk order.
 pub const CHUNK: usize = 1 << 15;
 
+/// Sources per chunk of the parallel counting sort.
+const SORT_CHUNK: usize = 1 << 16;
+
 /// One source, prepared for a level: its cell, in-cell fraction and attributes, packed so
 /// that the hot loop reads memory sequentially (variance in cell units).
 #[derive(Clone, Copy, Debug, Default)]
@@ -214,7 +217,6 @@ pub struct Workspace {
     order: Vec<u64>,
     src: Vec<PSource>,
     start: Vec<usize>,
-    next: Vec<usize>,
     r: u32,
 }
 
@@ -229,36 +231,63 @@ impl Workspace {
             .par_iter()
             .map(|&p| locate(p, geom.origin, h, r))
             .collect_into_vec(&mut self.located);
+        // Stable counting sort by cell z, in parallel: every chunk of sources buckets itself
+        // (keeping input order), then every z bucket concatenates the chunks' pieces in chunk
+        // order. The packed key (y, x, index) lets a later sort order a bucket by row, column
+        // and input order.
+        let nz = r as usize;
+        let local: Vec<(Vec<u64>, Vec<usize>)> = self
+            .located
+            .par_chunks(SORT_CHUNK)
+            .enumerate()
+            .map(|(ci, chunk)| {
+                let mut start = vec![0usize; nz + 1];
+                for (c, _) in chunk {
+                    start[c.z as usize + 1] += 1;
+                }
+                for z in 0..nz {
+                    start[z + 1] += start[z];
+                }
+                let mut next = start.clone();
+                let mut keys = vec![0u64; chunk.len()];
+                for (k, (c, _)) in chunk.iter().enumerate() {
+                    let i = (ci * SORT_CHUNK + k) as u64;
+                    let z = c.z as usize;
+                    keys[next[z]] = (u64::from(c.y) << 54) | (u64::from(c.x) << 44) | i;
+                    next[z] += 1;
+                }
+                (keys, start)
+            })
+            .collect();
         self.start.clear();
-        self.start.resize(r as usize + 1, 0);
-        for (c, _) in &self.located {
-            self.start[c.z as usize + 1] += 1;
+        self.start.resize(nz + 1, 0);
+        for z in 0..nz {
+            let count: usize = local.iter().map(|(_, st)| st[z + 1] - st[z]).sum();
+            self.start[z + 1] = self.start[z] + count;
         }
-        for z in 0..r as usize {
-            self.start[z + 1] += self.start[z];
-        }
-        self.next.clear();
-        self.next.extend_from_slice(&self.start);
         self.order.clear();
         self.order.resize(self.located.len(), 0);
-        for (i, (c, _)) in self.located.iter().enumerate() {
-            let z = c.z as usize;
-            // (y, x, index) packed so that sorting a bucket orders it by row, column, input.
-            self.order[self.next[z]] = (u64::from(c.y) << 54) | (u64::from(c.x) << 44) | i as u64;
-            self.next[z] += 1;
+        let mut buckets: Vec<&mut [u64]> = Vec::with_capacity(nz);
+        let mut rest = &mut self.order[..];
+        for z in 0..nz {
+            let (head, tail) = rest.split_at_mut(self.start[z + 1] - self.start[z]);
+            buckets.push(head);
+            rest = tail;
         }
+        let sort = pack && !src.ordered;
+        buckets.into_par_iter().enumerate().for_each(|(z, bucket)| {
+            let mut at = 0;
+            for (keys, st) in &local {
+                let piece = &keys[st[z]..st[z + 1]];
+                bucket[at..at + piece.len()].copy_from_slice(piece);
+                at += piece.len();
+            }
+            if sort {
+                bucket.sort_unstable();
+            }
+        });
         if !pack {
             return;
-        }
-        if !src.ordered {
-            let mut buckets: Vec<&mut [u64]> = Vec::with_capacity(r as usize);
-            let mut rest = &mut self.order[..];
-            for z in 0..r as usize {
-                let (head, tail) = rest.split_at_mut(self.start[z + 1] - self.start[z]);
-                buckets.push(head);
-                rest = tail;
-            }
-            buckets.into_par_iter().for_each(|b| b.sort_unstable());
         }
         let inv_h2 = 1.0 / (h * h).max(f32::MIN_POSITIVE);
         let located = &self.located;
