@@ -27,6 +27,7 @@ pub mod lighting_grid;
 pub mod reservoir;
 pub mod rng;
 pub mod sampling;
+pub mod timing;
 pub mod vpl;
 
 pub use glam::{Vec2, Vec3, Vec3A};

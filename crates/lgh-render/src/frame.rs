@@ -104,26 +104,7 @@ impl Default for RenderSettings {
     }
 }
 
-/// Wall time of each pass, in milliseconds, in the order they ran.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Timings(pub Vec<(String, f64)>);
-
-impl Timings {
-    /// Runs `f`, records its time under `name` and returns its result.
-    pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
-        let start = Instant::now();
-        let out = f();
-        self.0
-            .push((name.to_string(), start.elapsed().as_secs_f64() * 1e3));
-        out
-    }
-
-    /// The time recorded under `name`.
-    #[must_use]
-    pub fn get(&self, name: &str) -> Option<f64> {
-        self.0.iter().find(|(n, _)| n == name).map(|(_, t)| *t)
-    }
-}
+pub use lgh_core::timing::Timings;
 
 /// A rendered frame with its parts.
 #[derive(Clone, Debug)]

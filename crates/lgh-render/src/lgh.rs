@@ -252,7 +252,7 @@ pub fn render_lgh(
         lights.add_hierarchy(grid, group, lowest, settings.alpha);
         lighting_ms += start.elapsed().as_secs_f64() * 1e3;
     }
-    t.0.push(("lgh_build".into(), build_ms));
+    t.push("lgh_build", build_ms);
     let lighting_start = Instant::now();
     out.shaded_lights = lights.position.len();
     let bins = TileBins::build(g, frame, settings.tile, &lights.position, &lights.reach);
@@ -329,10 +329,10 @@ pub fn render_lgh(
         }
     });
     out.overdraw = shaded.iter().map(|p| p.1).collect();
-    t.0.push((
-        "lighting".into(),
+    t.push(
+        "lighting",
         lighting_ms + lighting_start.elapsed().as_secs_f64() * 1e3,
-    ));
+    );
 
     let albedo_pi = |i: usize| g.albedo[i] * FRAC_1_PI;
     if k == 0 {

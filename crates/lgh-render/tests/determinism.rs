@@ -1,14 +1,12 @@
 //! The same seed gives bit-identical images with 1 and 2 threads.
 
-use std::path::Path;
+mod common;
 
-use lgh_render::{Method, RenderSettings, Silent, World, render_frame};
+use lgh_render::{Method, RenderSettings, Silent, render_frame};
 
 #[test]
 fn one_and_two_threads_give_identical_images() {
-    let mut scene = lgh_scene::cornell::cornell_box();
-    scene.finish(Path::new("<built-in>")).unwrap();
-    let world = World::new(scene);
+    let world = common::cornell_world();
     let settings = RenderSettings {
         width: 64,
         height: 36,
@@ -18,15 +16,8 @@ fn one_and_two_threads_give_identical_images() {
         method: Method::Brute,
         ..RenderSettings::default()
     };
-    let run = |threads: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| render_frame(&world, &settings, &Silent).unwrap())
-    };
-    let a = run(1);
-    let b = run(2);
+    let a = common::render_on(&world, &settings, 1);
+    let b = common::render_on(&world, &settings, 2);
     assert_eq!(a.vpls.vpls, b.vpls.vpls);
     assert_eq!(a.image, b.image);
     assert_eq!(a.direct, b.direct);
@@ -42,4 +33,25 @@ fn one_and_two_threads_give_identical_images() {
     )
     .unwrap();
     assert_ne!(a.indirect, c.indirect);
+}
+
+/// The `lgh` method too (hierarchy build, binning, reservoirs, shadow rays, filter).
+#[test]
+fn lgh_is_identical_with_one_and_two_threads() {
+    let world = common::cornell_world();
+    let settings = RenderSettings {
+        width: 64,
+        height: 36,
+        vpls: 20_000,
+        seed: 3,
+        area_samples: 2,
+        method: Method::Lgh,
+        ..RenderSettings::default()
+    };
+    let (a, b) = (
+        common::render_on(&world, &settings, 1),
+        common::render_on(&world, &settings, 2),
+    );
+    assert_eq!(a.image, b.image);
+    assert_eq!(a.lgh, b.lgh);
 }

@@ -1,5 +1,7 @@
 //! The LGH method against the brute-force references.
 
+mod common;
+
 use std::path::Path;
 
 use lgh_core::lighting_grid::LevelCount;
@@ -8,9 +10,19 @@ use lgh_render::metrics::diff;
 use lgh_render::{Component, Frame, Method, RenderSettings, Silent, World, render_frame};
 
 fn cornell() -> World {
-    let mut scene = lgh_scene::cornell::cornell_box();
-    scene.finish(Path::new("<built-in>")).unwrap();
-    World::new(scene)
+    common::cornell_world()
+}
+
+/// The brute-force unshadowed reference (4000 VPLs).
+fn brute_unshadowed(world: &World) -> lgh_render::Image {
+    render(world, Method::BruteUnshadowed, 4000, LghSettings::default()).image
+}
+
+/// rel_rmse of `method` with `lgh` against the image `reference` (same size and VPLs).
+fn rel_rmse(world: &World, reference: &lgh_render::Image, method: Method, lgh: LghSettings) -> f64 {
+    diff(&render(world, method, 4000, lgh).image, reference)
+        .unwrap()
+        .rel_rmse
 }
 
 fn render(world: &World, method: Method, vpls: usize, lgh: LghSettings) -> Frame {
@@ -35,13 +47,7 @@ fn render(world: &World, method: Method, vpls: usize, lgh: LghSettings) -> Frame
 #[test]
 fn unshadowed_error_falls_with_alpha_and_vanishes_for_huge_radii() {
     let world = cornell();
-    let reference = render(
-        &world,
-        Method::BruteUnshadowed,
-        4000,
-        LghSettings::default(),
-    )
-    .image;
+    let reference = brute_unshadowed(&world);
     let err = |alpha: f32| {
         let lgh = LghSettings {
             alpha,
@@ -49,12 +55,7 @@ fn unshadowed_error_falls_with_alpha_and_vanishes_for_huge_radii() {
             shadow_samples: 0,
             ..LghSettings::default()
         };
-        diff(
-            &render(&world, Method::LghUnshadowed, 4000, lgh).image,
-            &reference,
-        )
-        .unwrap()
-        .rel_rmse
+        rel_rmse(&world, &reference, Method::LghUnshadowed, lgh)
     };
     let (e1, e2, e4) = (err(1.0), err(2.0), err(4.0));
     assert!(e1 > e2 && e2 > e4, "rel_rmse {e1} {e2} {e4}");
@@ -307,25 +308,14 @@ fn atrous_keeps_constants_and_edges() {
 #[test]
 fn normal_bins_reduce_the_error_of_the_hierarchy() {
     let world = cornell();
-    let reference = render(
-        &world,
-        Method::BruteUnshadowed,
-        4000,
-        LghSettings::default(),
-    )
-    .image;
+    let reference = brute_unshadowed(&world);
     let err = |normal_bins: bool| {
         let lgh = LghSettings {
             alpha: 2.0,
             normal_bins,
             ..LghSettings::default()
         };
-        diff(
-            &render(&world, Method::LghUnshadowed, 4000, lgh).image,
-            &reference,
-        )
-        .unwrap()
-        .rel_rmse
+        rel_rmse(&world, &reference, Method::LghUnshadowed, lgh)
     };
     let (one, six) = (err(false), err(true));
     eprintln!("rel_rmse one hierarchy {one}, six {six}");

@@ -130,24 +130,7 @@ pub struct LightingGrid {
 
 /// Wall time of each construction step, in milliseconds, in order: `bounds`, `level_count`
 /// (automatic mode only), `S1`, `S2`, ..., `compaction`, `merge`.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct BuildTimings(pub Vec<(String, f64)>);
-
-impl BuildTimings {
-    fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
-        let t = Instant::now();
-        let out = f();
-        self.0
-            .push((name.to_string(), t.elapsed().as_secs_f64() * 1e3));
-        out
-    }
-
-    /// Sum of all steps.
-    #[must_use]
-    pub fn total(&self) -> f64 {
-        self.0.iter().map(|(_, t)| t).sum()
-    }
-}
+pub type BuildTimings = crate::timing::Timings;
 
 impl LightingGrid {
     /// The top level l_max.
@@ -242,14 +225,7 @@ impl GridBuilder {
             let ws = &mut self.ws;
             t.time(&format!("S{l}"), || match construction {
                 Construction::GatherFromS1 => {
-                    let from = Sources {
-                        positions: &s1.position,
-                        intensity: &s1.intensity,
-                        normals: lights.normals.map(|_| &s1.normal[..]),
-                        mass: Some(&s1.mass),
-                        variance: Some(&s1.variance),
-                        ordered: true,
-                    };
+                    let from = s1.as_sources(lights.normals.is_some());
                     splat::splat_into(ws, &from, &geometry, l, out);
                 }
                 Construction::ScatterAll => splat::splat_into(ws, &src, &geometry, l, out),
@@ -333,8 +309,8 @@ impl GridBuilder {
             None => build(&mut self.ws, &mut self.levels[0], chosen),
         };
         let total = start.elapsed().as_secs_f64() * 1e3;
-        t.0.push(("level_count".into(), (total - s1_ms).max(0.0)));
-        t.0.push(("S1".into(), s1_ms));
+        t.push("level_count", (total - s1_ms).max(0.0));
+        t.push("S1", s1_ms);
         geometry
     }
 

@@ -63,18 +63,11 @@ pub fn build_reference(
     let mut levels = vec![splat_reference(&src, &geometry, 1)];
     for l in 2..=geometry.l_max {
         let level = match construction {
-            Construction::GatherFromS1 => {
-                let s1 = &levels[0];
-                let from = Sources {
-                    positions: &s1.position,
-                    intensity: &s1.intensity,
-                    normals: lights.normals.map(|_| &s1.normal[..]),
-                    mass: Some(&s1.mass),
-                    variance: Some(&s1.variance),
-                    ordered: true,
-                };
-                splat_reference(&from, &geometry, l)
-            }
+            Construction::GatherFromS1 => splat_reference(
+                &levels[0].as_sources(lights.normals.is_some()),
+                &geometry,
+                l,
+            ),
             Construction::ScatterAll => splat_reference(&src, &geometry, l),
         };
         levels.push(level);

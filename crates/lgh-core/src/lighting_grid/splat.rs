@@ -89,6 +89,21 @@ impl Level {
         self.mass.push(a.w as f32);
     }
 
+    /// This level's grid lights as sources for a coarser level (the gather from S_1): each
+    /// counts with its mass and its variance, and is already in vertex order. `normals` says
+    /// whether the input lights had normals.
+    #[must_use]
+    pub fn as_sources(&self, normals: bool) -> Sources<'_> {
+        Sources {
+            positions: &self.position,
+            intensity: &self.intensity,
+            normals: normals.then_some(&self.normal[..]),
+            mass: Some(&self.mass),
+            variance: Some(&self.variance),
+            ordered: true,
+        }
+    }
+
     pub(crate) fn truncate(&mut self, n: usize) {
         self.vertex.truncate(n);
         self.position.truncate(n);

@@ -114,3 +114,26 @@ pub fn mean_std(xs: &[f64]) -> (f64, f64) {
     let v = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
     (m, v.sqrt())
 }
+
+/// The built-in Cornell box, finished and prepared.
+pub fn cornell_world() -> lgh_render::World {
+    let mut scene = lgh_scene::cornell::cornell_box();
+    scene
+        .finish(std::path::Path::new("<built-in>"))
+        .expect("the built-in scene is valid");
+    lgh_render::World::new(scene)
+}
+
+/// Renders a frame on a pool of `threads` threads.
+pub fn render_on(
+    world: &lgh_render::World,
+    settings: &lgh_render::RenderSettings,
+    threads: usize,
+) -> lgh_render::Frame {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("thread pool")
+        .install(|| lgh_render::render_frame(world, settings, &lgh_render::Silent))
+        .expect("render")
+}
