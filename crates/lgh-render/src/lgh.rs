@@ -264,70 +264,67 @@ pub fn render_lgh(
     };
     let eps2 = eps * eps;
     let w = g.width as usize;
-    // Per pixel: A, overdraw, and k reservoirs.
-    type PixelOut = (
-        Vec3,
-        u32,
-        [Reservoir<ShadowSample>; MAX_SHADOW_SAMPLES as usize],
-    );
-    let mut shaded: Vec<PixelOut> = vec![
-        (
-            Vec3::ZERO,
-            0,
-            [Reservoir::new(); MAX_SHADOW_SAMPLES as usize]
-        );
-        n_px
-    ];
-    shaded.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        for (x, px) in row.iter_mut().enumerate() {
-            let i = y * w + x;
-            if !g.is_hit(i) {
-                continue;
-            }
-            let (xp, n) = (g.position[i], g.normal[i]);
-            let mut rng = Rng::new(&[seed, i as u64, STREAM_LGH]);
-            let (a, overdraw, res) = px;
-            for &j in bins.lights_at(x as u32, y as u32) {
-                let j = j as usize;
-                let l = lights.level[j] as usize;
-                let p = lights.position[j];
-                let d = (p - xp).length();
-                if d >= lights.reach[j] {
+    // Per pixel: A and overdraw; and k reservoirs per pixel in one flat buffer (memory fixed
+    // at k samples a pixel).
+    let mut shaded: Vec<(Vec3, u32)> = vec![(Vec3::ZERO, 0); n_px];
+    // (At least one slot a pixel so that the row chunks line up when k = 0.)
+    let slots = k.max(1);
+    let mut reservoirs: Vec<Reservoir<ShadowSample>> = vec![Reservoir::new(); n_px * slots];
+    shaded
+        .par_chunks_mut(w)
+        .zip(reservoirs.par_chunks_mut(w * slots))
+        .enumerate()
+        .for_each(|(y, (row, row_res))| {
+            for (x, px) in row.iter_mut().enumerate() {
+                let i = y * w + x;
+                if !g.is_hit(i) {
                     continue;
                 }
-                *overdraw += 1;
-                let b = blend(lights.role[j], d, lights.radius[j]);
-                if b <= 0.0 {
-                    continue;
-                }
-                let (nj, ij) = (lights.normal[j], lights.intensity[j]);
-                let c = vpl_irradiance(xp, n, p, nj, ij, eps2);
-                if c == Vec3::ZERO {
-                    continue;
-                }
-                *a += b * c;
-                if k > 0 && l as u32 >= settings.shadow_from_level {
-                    let dev = lights.deviation[j] * settings.dev_scale;
-                    let t = Vec3::new(
-                        raised_cosine(halves(rng.next_u32())),
-                        raised_cosine(halves(rng.next_u32())),
-                        raised_cosine(halves(rng.next_u32())),
-                    );
-                    let q = p + t * dev;
-                    let f = b * vpl_irradiance(xp, n, q, nj, ij, eps2);
-                    let lum = luminance(f);
-                    let sample = ShadowSample { q, n: nj, f };
-                    for pair in res[..k].chunks_mut(2) {
-                        let u = halves(rng.next_u32());
-                        pair[0].update(sample, lum, u.x);
-                        if let Some(r) = pair.get_mut(1) {
-                            r.update(sample, lum, u.y);
+                let (xp, n) = (g.position[i], g.normal[i]);
+                let mut rng = Rng::new(&[seed, i as u64, STREAM_LGH]);
+                let (a, overdraw) = px;
+                let res = &mut row_res[x * slots..x * slots + k];
+                for &j in bins.lights_at(x as u32, y as u32) {
+                    let j = j as usize;
+                    let l = lights.level[j] as usize;
+                    let p = lights.position[j];
+                    let d = (p - xp).length();
+                    if d >= lights.reach[j] {
+                        continue;
+                    }
+                    *overdraw += 1;
+                    let b = blend(lights.role[j], d, lights.radius[j]);
+                    if b <= 0.0 {
+                        continue;
+                    }
+                    let (nj, ij) = (lights.normal[j], lights.intensity[j]);
+                    let c = vpl_irradiance(xp, n, p, nj, ij, eps2);
+                    if c == Vec3::ZERO {
+                        continue;
+                    }
+                    *a += b * c;
+                    if k > 0 && l as u32 >= settings.shadow_from_level {
+                        let dev = lights.deviation[j] * settings.dev_scale;
+                        let t = Vec3::new(
+                            raised_cosine(halves(rng.next_u32())),
+                            raised_cosine(halves(rng.next_u32())),
+                            raised_cosine(halves(rng.next_u32())),
+                        );
+                        let q = p + t * dev;
+                        let f = b * vpl_irradiance(xp, n, q, nj, ij, eps2);
+                        let lum = luminance(f);
+                        let sample = ShadowSample { q, n: nj, f };
+                        for pair in res.chunks_mut(2) {
+                            let u = halves(rng.next_u32());
+                            pair[0].update(sample, lum, u.x);
+                            if let Some(r) = pair.get_mut(1) {
+                                r.update(sample, lum, u.y);
+                            }
                         }
                     }
                 }
             }
-        }
-    });
+        });
     out.overdraw = shaded.iter().map(|p| p.1).collect();
     t.push(
         "lighting",
@@ -353,7 +350,7 @@ pub fn render_lgh(
                 }
                 let (xp, ng) = (g.position[i], g.geo_normal[i]);
                 let (mut s, mut u) = (Vec3::ZERO, Vec3::ZERO);
-                for r in shaded[i].2.iter().take(k) {
+                for r in &reservoirs[i * slots..i * slots + k] {
                     let Some(sample) = r.sample else { continue };
                     let u_k = sample.f * (r.total / r.weight);
                     let visible =
@@ -367,10 +364,7 @@ pub fn render_lgh(
             })
             .unzip()
     });
-    out.shadow_rays = shaded
-        .iter()
-        .map(|p| p.2.iter().take(k).filter(|r| r.sample.is_some()).count() as u64)
-        .sum();
+    out.shadow_rays = reservoirs.iter().filter(|r| r.sample.is_some()).count() as u64;
     let (s_f, u_f) = t.time("shadow_filter", || {
         if settings.filter_passes > 0 {
             let params = AtrousParams {
