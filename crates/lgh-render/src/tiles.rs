@@ -123,6 +123,9 @@ pub fn screen_rect(
     c: Vec3,
     r: f32,
 ) -> Option<[u32; 4]> {
+    if width == 0 || height == 0 {
+        return None;
+    }
     let full = Some([0, 0, width - 1, height - 1]);
     if !r.is_finite() {
         return full;
