@@ -88,8 +88,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
                     "shadow_filter_ms": get("shadow_filter"),
                     "composite_ms": get("composite"),
                     "render_ms": total - build_ms,
-                    "avg_overdraw": out.overdraw.iter().map(|&o| f64::from(o)).sum::<f64>()
-                        / (0..g.len()).filter(|&i| g.is_hit(i)).count().max(1) as f64,
+                    "avg_overdraw": out.avg_overdraw(&g),
                     "grid_lights": out.grid_lights,
                     "levels": out.levels,
                 }),

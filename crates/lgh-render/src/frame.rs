@@ -189,12 +189,10 @@ pub fn render_frame(
                     s.method == Method::Lgh,
                     &mut GridBuilder::default(),
                 )?;
-                let hits = (0..g.len()).filter(|&i| g.is_hit(i)).count().max(1);
                 lgh_stats = Some(LghStats {
                     grid_lights: out.grid_lights,
                     levels: out.levels,
-                    avg_overdraw: out.overdraw.iter().map(|&o| f64::from(o)).sum::<f64>()
-                        / hits as f64,
+                    avg_overdraw: out.avg_overdraw(&g),
                     overdraw: out.overdraw,
                     shadow_rays: out.shadow_rays,
                 });

@@ -109,6 +109,15 @@ pub struct LghOutput {
     pub timings: Timings,
 }
 
+impl LghOutput {
+    /// Mean overdraw over the pixels of `g` that see a surface.
+    #[must_use]
+    pub fn avg_overdraw(&self, g: &GBuffer) -> f64 {
+        let hits = (0..g.len()).filter(|&i| g.is_hit(i)).count().max(1);
+        self.overdraw.iter().map(|&o| f64::from(o)).sum::<f64>() / hits as f64
+    }
+}
+
 /// The lights a pixel may see, structure-of-arrays, each with its level's radius r_l,
 /// blending role and reach (2 r_l, or infinite for the top level).
 #[derive(Default)]
@@ -227,10 +236,12 @@ pub fn render_lgh(
         return Ok(out);
     }
     // One hierarchy, or one per dominant normal direction (--normal-bins).
-    let groups: Vec<Vpls> = if settings.normal_bins {
-        split_by_normal(vpls)
+    let split;
+    let groups: Vec<&Vpls> = if settings.normal_bins {
+        split = split_by_normal(vpls);
+        split.iter().collect()
     } else {
-        vec![vpls.clone()]
+        vec![vpls]
     };
     let lowest = settings.start_level.min(1);
     let mut lights = ShadeLights::default();
