@@ -4,9 +4,11 @@ use std::path::PathBuf;
 
 use anyhow::{Result, anyhow};
 use clap::Args;
+use glam::Vec3;
+use lgh_core::color::luminance;
 use lgh_render::Image;
 use lgh_render::image::ImageFormat;
-use lgh_render::metrics::{diff, display_bytes, flip_mean};
+use lgh_render::metrics::{diff, display_bytes, flip_mean, mean_luminance};
 
 /// Compare image A against the reference B.
 #[derive(Debug, Args)]
@@ -22,6 +24,10 @@ pub struct DiffArgs {
     /// compared as they are).
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
+    /// Also write a signed error map to this PNG: per pixel (lum(A) - lum(B)) / mean lum(B),
+    /// blue where A is darker, red where brighter, white where equal, saturated at +-0.5.
+    #[arg(long)]
+    pub map: Option<PathBuf>,
 }
 
 pub fn run(args: &DiffArgs) -> Result<()> {
@@ -36,6 +42,9 @@ pub fn run(args: &DiffArgs) -> Result<()> {
         a.height,
     )
     .map_err(|e| anyhow!("{e}"))?;
+    if let Some(path) = &args.map {
+        error_map(&a, &b).save(path, 1.0)?;
+    }
     if args.json {
         let v = serde_json::json!({
             "rmse": m.rmse,
@@ -53,6 +62,27 @@ pub fn run(args: &DiffArgs) -> Result<()> {
         println!("flip      {flip:.6}  (LDR-FLIP mean, 0 = identical)");
     }
     Ok(())
+}
+
+/// The signed relative error map of `lgh diff --map` (same size as `a` and `b`).
+fn error_map(a: &Image, b: &Image) -> Image {
+    let mean = mean_luminance(b).max(1e-12) as f32;
+    let pixels = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(&pa, &pb)| {
+            let e = ((luminance(pa) - luminance(pb)) / mean * 2.0).clamp(-1.0, 1.0);
+            // Linear RGB chosen so the PNG's tone map shows white at 0.
+            let white = Vec3::splat(2.0);
+            if e >= 0.0 {
+                white.lerp(Vec3::new(2.0, 0.0, 0.0), e)
+            } else {
+                white.lerp(Vec3::new(0.0, 0.1, 2.0), -e)
+            }
+        })
+        .collect();
+    Image::from_pixels(a.width, a.height, pixels)
 }
 
 fn finite_or_null(x: f64) -> serde_json::Value {

@@ -6,6 +6,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 use lgh_core::lighting_grid::LevelCount;
+use lgh_core::vpl::GridEmission;
 use lgh_render::image::check_output_path;
 use lgh_render::lgh::{LghSettings, MAX_SHADOW_SAMPLES};
 use lgh_render::{Component, Method, RenderSettings, World, render_frame};
@@ -33,6 +34,17 @@ pub enum FilterArg {
     Atrous,
     /// No filter.
     None,
+}
+
+/// Directional emission models of grid lights.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum EmissionArg {
+    /// max(0, m . w) with m the weighted mean normal, not renormalised (the authors' demo):
+    /// clusters whose normals disagree lose light.
+    MeanNormal,
+    /// max(0, m . w) + (1 - |m|) / 4: the share lost by the mean normal is emitted uniformly,
+    /// so every cluster keeps its VPLs' total flux (an extension of the paper).
+    Energy,
 }
 
 /// Parts of the radiance to write.
@@ -107,6 +119,9 @@ pub struct RenderArgs {
     /// of the paper: grid lights then average only normals that roughly agree).
     #[arg(long)]
     pub normal_bins: bool,
+    /// lgh: how a grid light's emission depends on direction.
+    #[arg(long, value_enum, default_value = "energy")]
+    pub grid_emission: EmissionArg,
     /// lgh: write the per-pixel overdraw (lights covering each pixel) as a colour map with a
     /// legend bar to this PNG (the paper's Fig. 5).
     #[arg(long)]
@@ -173,6 +188,10 @@ fn lgh_settings(args: &RenderArgs) -> Result<LghSettings> {
             FilterArg::None => 0,
         },
         normal_bins: args.normal_bins,
+        emission: match args.grid_emission {
+            EmissionArg::MeanNormal => GridEmission::MeanNormal,
+            EmissionArg::Energy => GridEmission::EnergyConserving,
+        },
         ..LghSettings::default()
     })
 }

@@ -5,9 +5,11 @@
 //!    default, 4.1; 0 adds the VPLs themselves as S_0 with h_0 = h_1 / 2) are binned into
 //!    screen tiles as spheres of radius 2 r_l, r_l = alpha h_l (the top level covers the whole
 //!    screen), the CPU counterpart of rasterising light volumes. Each pixel x sums, over its
-//!    tile's lights j, B_l(d_j) x Phi_j max(0, -n_j . w) max(0, n_x . w) / (pi (d^2 + eps^2))
-//!    (the unshadowed sum A), skipping lights whose blending weight is zero. The number of
-//!    lights whose sphere covers the pixel is its overdraw (Fig. 5).
+//!    tile's lights j, B_l(d_j) x Phi_j e_j(w) max(0, n_x . w) / (pi (d^2 + eps^2))
+//!    (the unshadowed sum A), skipping lights whose blending weight is zero. The emission
+//!    cosine e_j is max(0, -m_j . w) + (1 - |m_j|) / 4 for the mean normal m_j by default
+//!    ([`GridEmission`]; max(0, -m_j . w) alone is the demo's, which loses light where normals
+//!    disagree). The number of lights whose sphere covers the pixel is its overdraw (Fig. 5).
 //! 3. **Shadow sample selection** (3.3, Appendix A): while shading, each pixel keeps k
 //!    single-slot reservoirs; every light of level >= the shadow level (2 by default, 4.1,
 //!    Fig. 3) is offered with weight f_j = luminance of its unshadowed contribution at a
@@ -31,7 +33,7 @@ use lgh_core::lighting_grid::{
 use lgh_core::reservoir::Reservoir;
 use lgh_core::rng::Rng;
 use lgh_core::sampling::raised_cosine;
-use lgh_core::vpl::{Vpls, vpl_irradiance};
+use lgh_core::vpl::{GridEmission, Vpls, light_irradiance};
 use lgh_scene::camera::CameraFrame;
 use rayon::prelude::*;
 
@@ -71,6 +73,8 @@ pub struct LghSettings {
     /// (`--normal-bins`; an extension, not in the paper: grid lights then average only
     /// normals that roughly agree, which loses less light in rooms).
     pub normal_bins: bool,
+    /// Directional emission model of grid lights (`--grid-emission`).
+    pub emission: GridEmission,
 }
 
 impl Default for LghSettings {
@@ -86,6 +90,7 @@ impl Default for LghSettings {
             dev_scale: 0.5,
             construction: Construction::GatherFromS1,
             normal_bins: false,
+            emission: GridEmission::EnergyConserving,
         }
     }
 }
@@ -124,6 +129,8 @@ impl LghOutput {
 struct ShadeLights {
     position: Vec<Vec3>,
     normal: Vec<Vec3>,
+    /// Isotropic share of the emission cosine ([`GridEmission::isotropic`]).
+    iso: Vec<f32>,
     intensity: Vec<Vec3>,
     deviation: Vec<Vec3>,
     level: Vec<u8>,
@@ -134,7 +141,14 @@ struct ShadeLights {
 
 impl ShadeLights {
     /// Adds levels `lowest..=l_max` of `grid` (level 0 = the VPLs `vpls` it was built from).
-    fn add_hierarchy(&mut self, grid: &LightingGrid, vpls: &Vpls, lowest: u32, alpha: f32) {
+    fn add_hierarchy(
+        &mut self,
+        grid: &LightingGrid,
+        vpls: &Vpls,
+        lowest: u32,
+        alpha: f32,
+        emission: GridEmission,
+    ) {
         let geom = grid.geometry;
         let l_max = geom.l_max;
         for l in lowest..=l_max {
@@ -153,6 +167,7 @@ impl ShadeLights {
             let role = LevelRole::of(l, lowest, l_max);
             self.position.extend_from_slice(p);
             self.normal.extend_from_slice(n);
+            self.iso.extend(n.iter().map(|&m| emission.isotropic(m)));
             self.intensity.extend_from_slice(i);
             match d {
                 Some(d) => self.deviation.extend_from_slice(d),
@@ -260,7 +275,7 @@ pub fn render_lgh(
         let start = Instant::now();
         out.grid_lights += grid.len();
         out.levels = out.levels.max(grid.l_max());
-        lights.add_hierarchy(grid, group, lowest, settings.alpha);
+        lights.add_hierarchy(grid, group, lowest, settings.alpha, settings.emission);
         lighting_ms += start.elapsed().as_secs_f64() * 1e3;
     }
     t.push("lgh_build", build_ms);
@@ -308,8 +323,8 @@ pub fn render_lgh(
                     if b <= 0.0 {
                         continue;
                     }
-                    let (nj, ij) = (lights.normal[j], lights.intensity[j]);
-                    let c = vpl_irradiance(xp, n, p, nj, ij, eps2);
+                    let (nj, ij, iso) = (lights.normal[j], lights.intensity[j], lights.iso[j]);
+                    let c = light_irradiance(xp, n, p, nj, iso, ij, eps2);
                     if c == Vec3::ZERO {
                         continue;
                     }
@@ -322,7 +337,7 @@ pub fn render_lgh(
                             raised_cosine(halves(rng.next_u32())),
                         );
                         let q = p + t * dev;
-                        let f = b * vpl_irradiance(xp, n, q, nj, ij, eps2);
+                        let f = b * light_irradiance(xp, n, q, nj, iso, ij, eps2);
                         let lum = luminance(f);
                         let sample = ShadowSample { q, n: nj, f };
                         for pair in res.chunks_mut(2) {
