@@ -9,6 +9,7 @@ use lgh_core::lighting_grid::LevelCount;
 use lgh_core::vpl::GridEmission;
 use lgh_render::image::check_output_path;
 use lgh_render::lgh::{LghSettings, MAX_SHADOW_SAMPLES};
+use lgh_render::slc::SlcSettings;
 use lgh_render::{Component, Method, RenderSettings, World, render_frame};
 
 use crate::progress_bar::Bars;
@@ -25,6 +26,11 @@ pub enum MethodArg {
     Lgh,
     /// Lighting grid hierarchy without shadows.
     LghUnshadowed,
+    /// Stochastic light culling (Tokuyoshi & Harada 2016): random unbiased light ranges,
+    /// tiled lighting; shadows through the ratio estimator (--shadow-samples, 0 = none).
+    Slc,
+    /// Tiled lighting with light ranges clamped from the error bound (biased darker).
+    SlcClamped,
 }
 
 /// Shadow filters.
@@ -99,17 +105,17 @@ pub struct RenderArgs {
     /// lgh: number of hierarchy levels, `auto` (largest with |S1| < VPLs/2) or 1..=10.
     #[arg(long, default_value = "auto")]
     pub levels: String,
-    /// lgh: shadow samples (shadow rays) per pixel, 0 = no shadows (at most 16).
+    /// lgh, slc: shadow samples (shadow rays) per pixel, 0 = no shadows (at most 16).
     #[arg(long, default_value_t = 4)]
     pub shadow_samples: u32,
     /// lgh: lowest level whose lights are shadow candidates (2 skips S1, as the paper; 0 adds
     /// the VPLs when --start-level is 0).
     #[arg(long, default_value_t = 2)]
     pub shadow_from_level: u32,
-    /// lgh: filter applied to the shadow estimates.
+    /// lgh, slc: filter applied to the shadow estimates.
     #[arg(long, value_enum, default_value = "atrous")]
     pub filter: FilterArg,
-    /// lgh: a-trous passes.
+    /// lgh, slc: a-trous passes.
     #[arg(long, default_value_t = 5)]
     pub filter_passes: u32,
     /// lgh: lowest level shaded: 1 (S1, the paper's default) or 0 (the VPLs themselves).
@@ -122,6 +128,19 @@ pub struct RenderArgs {
     /// lgh: how a grid light's emission depends on direction.
     #[arg(long, value_enum, default_value = "energy")]
     pub grid_emission: EmissionArg,
+    /// slc: error bound epsilon_max of the light ranges (the paper's default 0.0005; smaller =
+    /// longer ranges, less noise, slower). The ranges also use --exposure.
+    #[arg(long, default_value_t = 0.0005)]
+    pub error_bound: f32,
+    /// slc: n x n interleaved sampling (each of the n^2 sub-images shades 1/n^2 of the VPLs).
+    #[arg(long, default_value_t = 8)]
+    pub interleave: u32,
+    /// lgh, slc: screen tile edge in (sub-image) pixels for light binning.
+    #[arg(long, default_value_t = 16)]
+    pub tile: u32,
+    /// slc: seed of the per-light random numbers xi_i that draw the light ranges.
+    #[arg(long, default_value_t = 0)]
+    pub frame_seed: u32,
     /// lgh: write the per-pixel overdraw (lights covering each pixel) as a colour map with a
     /// legend bar to this PNG (the paper's Fig. 5).
     #[arg(long)]
@@ -174,6 +193,9 @@ fn lgh_settings(args: &RenderArgs) -> Result<LghSettings> {
             args.shadow_samples
         );
     }
+    if args.tile == 0 || args.tile > 256 {
+        bail!("--tile {}: expected 1 to 256", args.tile);
+    }
     if args.start_level > 1 {
         bail!("--start-level {}: expected 0 or 1", args.start_level);
     }
@@ -187,12 +209,36 @@ fn lgh_settings(args: &RenderArgs) -> Result<LghSettings> {
             FilterArg::Atrous => args.filter_passes,
             FilterArg::None => 0,
         },
+        tile: args.tile,
         normal_bins: args.normal_bins,
         emission: match args.grid_emission {
             EmissionArg::MeanNormal => GridEmission::MeanNormal,
             EmissionArg::Energy => GridEmission::EnergyConserving,
         },
         ..LghSettings::default()
+    })
+}
+
+/// The SLC settings from the flags (sharing the shadow flags with lgh), validated.
+fn slc_settings(args: &RenderArgs, lgh: &LghSettings, exposure: f32) -> Result<SlcSettings> {
+    if !args.error_bound.is_finite() || args.error_bound <= 0.0 {
+        bail!(
+            "--error-bound {}: must be a positive number",
+            args.error_bound
+        );
+    }
+    if !(1..=16).contains(&args.interleave) {
+        bail!("--interleave {}: expected 1 to 16", args.interleave);
+    }
+    Ok(SlcSettings {
+        error_bound: args.error_bound,
+        exposure,
+        interleave: args.interleave,
+        tile: args.tile,
+        shadow_samples: lgh.shadow_samples,
+        frame_seed: args.frame_seed,
+        filter_passes: lgh.filter_passes,
+        ..SlcSettings::default()
     })
 }
 
@@ -241,12 +287,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             MethodArg::BruteUnshadowed => Method::BruteUnshadowed,
             MethodArg::Lgh => Method::Lgh,
             MethodArg::LghUnshadowed => Method::LghUnshadowed,
+            MethodArg::Slc => Method::Slc,
+            MethodArg::SlcClamped => Method::SlcClamped,
         },
         component: match args.component {
             ComponentArg::All => Component::All,
             ComponentArg::Direct => Component::Direct,
             ComponentArg::Indirect => Component::Indirect,
         },
+        slc: slc_settings(args, &lgh, exposure)?,
         lgh,
         ..RenderSettings::default()
     };
@@ -289,6 +338,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             stats["shadow_rays"] = l.shadow_rays.into();
             stats["alpha"] = f64::from(settings.lgh.alpha).into();
             stats["shadow_samples"] = settings.lgh.shadow_samples.into();
+        }
+        if let Some(l) = &frame.slc {
+            stats["avg_lights_per_pixel"] = l.avg_lights_per_pixel.into();
+            stats["shadow_rays"] = l.shadow_rays.into();
+            stats["error_bound"] = f64::from(settings.slc.error_bound).into();
+            stats["interleave"] = settings.slc.interleave.into();
+            stats["frame_seed"] = settings.slc.frame_seed.into();
+            stats["shadow_samples"] = settings.slc.shadow_samples.into();
         }
         let text = serde_json::to_string_pretty(&stats)?;
         std::fs::write(path, text + "\n")

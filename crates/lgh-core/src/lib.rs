@@ -11,6 +11,7 @@
 //! | [`vpl`] | virtual point lights, stored structure-of-arrays | Keller 1997; LGH 2019 section 3 |
 //! | [`lighting_grid`] | the lighting grid hierarchy, built in parallel | LGH 2019 section 3.1 |
 //! | [`blending`] | blending functions B_l(d), radii r_l = alpha h_l | LGH 2019 section 2.2, Fig. 2 |
+//! | [`light_range`] | stochastic and clamped light ranges | SLC 2016 sections 3.1-3.2, Appendix A |
 //! | [`reservoir`] | streaming weighted selection of shadow samples | LGH 2019 section 3.3, Appendix A |
 //!
 //! Everything here is plain data plus functions, so that other engines can use it with their
@@ -23,6 +24,7 @@
 
 pub mod blending;
 pub mod color;
+pub mod light_range;
 pub mod lighting_grid;
 pub mod reservoir;
 pub mod rng;

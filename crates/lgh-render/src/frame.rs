@@ -21,6 +21,7 @@ use crate::gbuffer::GBuffer;
 use crate::image::Image;
 use crate::lgh::{LghSettings, render_lgh};
 use crate::progress::Progress;
+use crate::slc::{RangeMode, SlcSettings, render_slc};
 use crate::vpl_gen::{VplSet, generate_vpls};
 use crate::world::World;
 
@@ -35,6 +36,11 @@ pub enum Method {
     Lgh,
     /// Lighting grid hierarchy without shadows.
     LghUnshadowed,
+    /// Stochastic tiled lighting (Tokuyoshi & Harada 2016); shadowed through the ratio
+    /// estimator when `slc.shadow_samples > 0`.
+    Slc,
+    /// Tiled lighting with clamped light ranges (the biased baseline of the same paper).
+    SlcClamped,
 }
 
 impl Method {
@@ -46,6 +52,8 @@ impl Method {
             Method::BruteUnshadowed => "brute-unshadowed",
             Method::Lgh => "lgh",
             Method::LghUnshadowed => "lgh-unshadowed",
+            Method::Slc => "slc",
+            Method::SlcClamped => "slc-clamped",
         }
     }
 }
@@ -85,6 +93,8 @@ pub struct RenderSettings {
     pub clamp_fraction: f32,
     /// Settings of the `lgh` methods.
     pub lgh: LghSettings,
+    /// Settings of the `slc` methods.
+    pub slc: SlcSettings,
 }
 
 impl Default for RenderSettings {
@@ -100,6 +110,7 @@ impl Default for RenderSettings {
             component: Component::All,
             clamp_fraction: 0.01,
             lgh: LghSettings::default(),
+            slc: SlcSettings::default(),
         }
     }
 }
@@ -125,6 +136,17 @@ pub struct Frame {
     pub timings: Timings,
     /// Statistics of the `lgh` methods.
     pub lgh: Option<LghStats>,
+    /// Statistics of the `slc` methods.
+    pub slc: Option<SlcStats>,
+}
+
+/// Statistics of an `slc` frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SlcStats {
+    /// Mean number of lights evaluated (within range) per pixel that sees a surface.
+    pub avg_lights_per_pixel: f64,
+    /// Shadow rays traced.
+    pub shadow_rays: u64,
 }
 
 /// Statistics of an `lgh` frame (the paper's Table 3 and Fig. 5).
@@ -173,6 +195,7 @@ pub fn render_frame(
     });
     let eps = s.clamp_fraction * world.radius;
     let mut lgh_stats = None;
+    let mut slc_stats = None;
     let indirect = t.time("indirect", || -> Result<Vec<Vec3>, RenderError> {
         Ok(match s.method {
             Method::Brute => render_brute(world, &g, &vpls.vpls, eps, true, progress),
@@ -194,6 +217,30 @@ pub fn render_frame(
                     levels: out.levels,
                     avg_overdraw: out.avg_overdraw(&g),
                     overdraw: out.overdraw,
+                    shadow_rays: out.shadow_rays,
+                });
+                sub_timings = out.timings.0;
+                out.indirect
+            }
+            Method::Slc | Method::SlcClamped => {
+                let mode = if s.method == Method::Slc {
+                    RangeMode::Stochastic
+                } else {
+                    RangeMode::Clamped
+                };
+                let out = render_slc(
+                    world,
+                    &g,
+                    &camera,
+                    &vpls.vpls,
+                    eps,
+                    mode,
+                    &s.slc,
+                    s.seed,
+                    s.slc.shadow_samples > 0,
+                );
+                slc_stats = Some(SlcStats {
+                    avg_lights_per_pixel: out.avg_lights_per_pixel(&g),
                     shadow_rays: out.shadow_rays,
                 });
                 sub_timings = out.timings.0;
@@ -228,5 +275,6 @@ pub fn render_frame(
         vpls,
         timings: t,
         lgh: lgh_stats,
+        slc: slc_stats,
     })
 }

@@ -21,7 +21,6 @@
 //!    ([`crate::atrous`]), and indirect = albedo / pi x A x D(S) / D(U) per channel (ratio 1
 //!    where D(U) is zero).
 
-use std::f32::consts::FRAC_1_PI;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -30,23 +29,23 @@ use lgh_core::color::luminance;
 use lgh_core::lighting_grid::{
     Construction, GridBuilder, GridError, InputLights, LevelCount, LightingGrid,
 };
-use lgh_core::reservoir::Reservoir;
 use lgh_core::rng::Rng;
 use lgh_core::sampling::raised_cosine;
 use lgh_core::vpl::{GridEmission, Vpls, light_irradiance};
 use lgh_scene::camera::CameraFrame;
 use rayon::prelude::*;
 
-use crate::atrous::{AtrousParams, filter_ratio_pair};
 use crate::frame::Timings;
 use crate::gbuffer::GBuffer;
+use crate::ratio::{
+    ShadowReservoirs, ShadowSample, ShadowSettings, halves, offer, shadowed_indirect,
+};
 use crate::tiles::TileBins;
 use crate::world::World;
 
 /// Random-stream tag of the LGH lighting pass.
 const STREAM_LGH: u64 = 0x161;
-/// Most shadow samples per pixel.
-pub const MAX_SHADOW_SAMPLES: u32 = 16;
+pub use crate::ratio::MAX_SHADOW_SAMPLES;
 
 /// Settings of the LGH method (command-line flags in brackets).
 #[derive(Clone, Debug, PartialEq)]
@@ -184,16 +183,6 @@ impl ShadeLights {
     }
 }
 
-/// Two uniform numbers in (0, 1) from the halves of 32 random bits (16 bits each: ample for
-/// a jitter or a reservoir decision, and half the generator calls of the hot loop).
-#[inline]
-fn halves(x: u32) -> glam::Vec2 {
-    glam::Vec2::new(
-        ((x & 0xffff) as f32 + 0.5) / 65536.0,
-        ((x >> 16) as f32 + 0.5) / 65536.0,
-    )
-}
-
 /// Splits VPLs into six groups by the dominant axis and sign of their normal (+x, -x, +y,
 /// -y, +z, -z), so that each hierarchy only averages normals that roughly agree.
 fn split_by_normal(vpls: &Vpls) -> Vec<Vpls> {
@@ -212,15 +201,6 @@ fn split_by_normal(vpls: &Vpls) -> Vec<Vpls> {
         groups[bin].push(vpls.positions[i], n, vpls.flux[i]);
     }
     groups
-}
-
-/// A held shadow sample: jittered position, the light's mean normal (the ray's end is moved
-/// off the surface along it, as for VPLs in the brute force) and the unshadowed contribution.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct ShadowSample {
-    q: Vec3,
-    n: Vec3,
-    f: Vec3,
 }
 
 /// Renders the indirect light of `vpls` with the lighting grid hierarchy. With
@@ -290,15 +270,13 @@ pub fn render_lgh(
     };
     let eps2 = eps * eps;
     let w = g.width as usize;
-    // Per pixel: A and overdraw; and k reservoirs per pixel in one flat buffer (memory fixed
-    // at k samples a pixel).
+    // Per pixel: A and overdraw; and k reservoirs.
     let mut shaded: Vec<(Vec3, u32)> = vec![(Vec3::ZERO, 0); n_px];
-    // (At least one slot a pixel so that the row chunks line up when k = 0.)
-    let slots = k.max(1);
-    let mut reservoirs: Vec<Reservoir<ShadowSample>> = vec![Reservoir::new(); n_px * slots];
+    let mut reservoirs = ShadowReservoirs::new(n_px, k);
+    let layout = reservoirs.layout();
     shaded
         .par_chunks_mut(w)
-        .zip(reservoirs.par_chunks_mut(w * slots))
+        .zip(reservoirs.rows_mut(w))
         .enumerate()
         .for_each(|(y, (row, row_res))| {
             for (x, px) in row.iter_mut().enumerate() {
@@ -309,7 +287,7 @@ pub fn render_lgh(
                 let (xp, n) = (g.position[i], g.normal[i]);
                 let mut rng = Rng::new(&[seed, i as u64, STREAM_LGH]);
                 let (a, overdraw) = px;
-                let res = &mut row_res[x * slots..x * slots + k];
+                let res = layout.pixel_mut(row_res, x);
                 for &j in bins.lights_at(x as u32, y as u32) {
                     let j = j as usize;
                     let l = lights.level[j] as usize;
@@ -339,14 +317,7 @@ pub fn render_lgh(
                         let q = p + t * dev;
                         let f = b * light_irradiance(xp, n, q, nj, iso, ij, eps2);
                         let lum = luminance(f);
-                        let sample = ShadowSample { q, n: nj, f };
-                        for pair in res.chunks_mut(2) {
-                            let u = halves(rng.next_u32());
-                            pair[0].update(sample, lum, u.x);
-                            if let Some(r) = pair.get_mut(1) {
-                                r.update(sample, lum, u.y);
-                            }
-                        }
+                        offer(res, ShadowSample { q, n: nj, f }, lum, &mut rng);
                     }
                 }
             }
@@ -357,63 +328,12 @@ pub fn render_lgh(
         lighting_ms + lighting_start.elapsed().as_secs_f64() * 1e3,
     );
 
-    let albedo_pi = |i: usize| g.albedo[i] * FRAC_1_PI;
-    if k == 0 {
-        t.time("composite", || {
-            out.indirect = (0..n_px).map(|i| albedo_pi(i) * shaded[i].0).collect();
-        });
-        out.timings = t;
-        return Ok(out);
-    }
-
-    // Shadow rays: S_hat and U_hat per pixel.
-    let (s_hat, u_hat): (Vec<Vec3>, Vec<Vec3>) = t.time("shadow_rays", || {
-        (0..n_px)
-            .into_par_iter()
-            .map(|i| {
-                if !g.is_hit(i) {
-                    return (Vec3::ZERO, Vec3::ZERO);
-                }
-                let (xp, ng) = (g.position[i], g.geo_normal[i]);
-                let (mut s, mut u) = (Vec3::ZERO, Vec3::ZERO);
-                for r in &reservoirs[i * slots..i * slots + k] {
-                    let Some(sample) = r.sample else { continue };
-                    let u_k = sample.f * (r.total / r.weight);
-                    let visible =
-                        !world.occluded_between(xp, ng, sample.q, sample.n.normalize_or_zero());
-                    u += u_k;
-                    if visible {
-                        s += u_k;
-                    }
-                }
-                (s / k as f32, u / k as f32)
-            })
-            .unzip()
-    });
-    out.shadow_rays = reservoirs.iter().filter(|r| r.sample.is_some()).count() as u64;
-    let (s_f, u_f) = t.time("shadow_filter", || {
-        if settings.filter_passes > 0 {
-            let params = AtrousParams {
-                passes: settings.filter_passes,
-                ..AtrousParams::lgh_defaults(world.radius)
-            };
-            filter_ratio_pair(&s_hat, &u_hat, g, &params)
-        } else {
-            (s_hat, u_hat)
-        }
-    });
-    t.time("composite", || {
-        out.indirect = (0..n_px)
-            .map(|i| {
-                let ratio = Vec3::select(
-                    u_f[i].cmpgt(Vec3::splat(1e-20)),
-                    (s_f[i] / u_f[i]).clamp(Vec3::ZERO, Vec3::ONE),
-                    Vec3::ONE,
-                );
-                albedo_pi(i) * shaded[i].0 * ratio
-            })
-            .collect();
-    });
+    let a: Vec<Vec3> = shaded.iter().map(|p| p.0).collect();
+    let shadow = ShadowSettings {
+        filter_passes: settings.filter_passes,
+        interleave_blur: None,
+    };
+    (out.indirect, out.shadow_rays) = shadowed_indirect(world, g, &a, &reservoirs, &shadow, &mut t);
     out.timings = t;
     Ok(out)
 }

@@ -15,6 +15,9 @@
 //! | [`lgh`] | lighting grid hierarchy rendering: tiled lighting, shadow selection, ratio estimator |
 //! | [`tiles`] | screen-tile binning of light volumes (shared by the tiled methods) |
 //! | [`atrous`] | edge-avoiding a-trous filter |
+//! | [`interleave`] | interleaved sampling: sub-image lattices, split/merge, discontinuity-aware blur |
+//! | [`slc`] | stochastic light culling: stochastic and clamped tiled lighting |
+//! | [`ratio`] | ray-traced shadows through the ratio estimator (shared by LGH and SLC) |
 //! | [`frame`] | the passes in order, with timings |
 //! | [`image`], [`tonemap`], [`metrics`] | EXR/PNG files, tone mapping, image differences |
 //! | [`raybench`] | ray throughput measurement |
@@ -34,18 +37,23 @@ pub mod direct;
 pub mod frame;
 pub mod gbuffer;
 pub mod image;
+pub mod interleave;
 pub mod lgh;
 pub mod lights;
 pub mod metrics;
 pub mod passes;
 pub mod progress;
+pub mod ratio;
 pub mod raybench;
+pub mod slc;
 pub mod tiles;
 pub mod tonemap;
 pub mod vpl_gen;
 pub mod world;
 
-pub use frame::{Component, Frame, LghStats, Method, RenderError, RenderSettings, render_frame};
+pub use frame::{
+    Component, Frame, LghStats, Method, RenderError, RenderSettings, SlcStats, render_frame,
+};
 pub use image::Image;
 pub use progress::{Progress, Silent};
 pub use world::World;

@@ -11,6 +11,7 @@ use glam::Vec3;
 use lgh_scene::camera::CameraFrame;
 
 use crate::gbuffer::GBuffer;
+use crate::interleave::Lattice;
 
 /// Lights binned into screen tiles, as a compressed sparse row table.
 #[derive(Clone, Debug, Default)]
@@ -46,15 +47,30 @@ impl TileBins {
         centres: &[Vec3],
         radii: &[f32],
     ) -> Self {
-        let tile = tile.max(1);
+        Self::build_lattice(g, frame, tile, Lattice::FULL, centres, radii)
+    }
+
+    /// [`TileBins::build`] for one sub-image of interleaved sampling: tiles of `tile`
+    /// sub-image pixels, that is `tile * n` full-resolution pixels, whose depth ranges only
+    /// count the sub-image's pixels. [`TileBins::lights_at`] takes full-resolution pixels.
+    #[must_use]
+    pub fn build_lattice(
+        g: &GBuffer,
+        frame: &CameraFrame,
+        tile: u32,
+        lattice: Lattice,
+        centres: &[Vec3],
+        radii: &[f32],
+    ) -> Self {
+        let tile = tile.max(1) * lattice.n.max(1);
         let tiles_x = g.width.div_ceil(tile);
         let tiles_y = g.height.div_ceil(tile);
         let n_tiles = (tiles_x * tiles_y) as usize;
         // Depth range of each tile (empty range where the tile sees nothing).
         let mut zmin = vec![f32::INFINITY; n_tiles];
         let mut zmax = vec![f32::NEG_INFINITY; n_tiles];
-        for y in 0..g.height {
-            for x in 0..g.width {
+        for y in (lattice.sy..g.height).step_by(lattice.n.max(1) as usize) {
+            for x in (lattice.sx..g.width).step_by(lattice.n.max(1) as usize) {
                 let i = (y * g.width + x) as usize;
                 if g.is_hit(i) {
                     let t = (y / tile * tiles_x + x / tile) as usize;

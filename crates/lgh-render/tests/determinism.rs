@@ -55,3 +55,29 @@ fn lgh_is_identical_with_one_and_two_threads() {
     assert_eq!(a.image, b.image);
     assert_eq!(a.lgh, b.lgh);
 }
+
+/// The `slc` method with 4 x 4 interleaving and shadows (ranges, binning per sub-image,
+/// reservoirs, blur, filter); a different frame seed gives a different image.
+#[test]
+fn slc_is_identical_with_one_and_two_threads() {
+    let world = common::cornell_world();
+    let mut settings = RenderSettings {
+        width: 64,
+        height: 36,
+        vpls: 20_000,
+        seed: 3,
+        area_samples: 2,
+        method: Method::Slc,
+        ..RenderSettings::default()
+    };
+    settings.slc.interleave = 4;
+    let (a, b) = (
+        common::render_on(&world, &settings, 1),
+        common::render_on(&world, &settings, 2),
+    );
+    assert_eq!(a.image, b.image);
+    assert_eq!(a.slc, b.slc);
+    settings.slc.frame_seed = 1;
+    let c = common::render_on(&world, &settings, 2);
+    assert_ne!(a.indirect, c.indirect);
+}
