@@ -132,9 +132,11 @@ pub struct RenderArgs {
     /// longer ranges, less noise, slower). The ranges also use --exposure.
     #[arg(long, default_value_t = 0.0005)]
     pub error_bound: f32,
-    /// slc: n x n interleaved sampling (each of the n^2 sub-images shades 1/n^2 of the VPLs).
-    #[arg(long, default_value_t = 8)]
-    pub interleave: u32,
+    /// lgh, slc: n x n interleaved sampling: each of the n^2 sub-images shades 1/n^2 of the
+    /// lights (of each level, for lgh), then a discontinuity-aware blur recombines them.
+    /// Default: 1 (none) for lgh, 8 for slc (the papers' settings).
+    #[arg(long)]
+    pub interleave: Option<u32>,
     /// lgh, slc: screen tile edge in (sub-image) pixels for light binning.
     #[arg(long, default_value_t = 16)]
     pub tile: u32,
@@ -193,6 +195,11 @@ fn lgh_settings(args: &RenderArgs) -> Result<LghSettings> {
             args.shadow_samples
         );
     }
+    if let Some(n) = args.interleave
+        && !(1..=16).contains(&n)
+    {
+        bail!("--interleave {n}: expected 1 to 16");
+    }
     if args.tile == 0 || args.tile > 256 {
         bail!("--tile {}: expected 1 to 256", args.tile);
     }
@@ -210,6 +217,7 @@ fn lgh_settings(args: &RenderArgs) -> Result<LghSettings> {
             FilterArg::None => 0,
         },
         tile: args.tile,
+        interleave: args.interleave.unwrap_or(1),
         normal_bins: args.normal_bins,
         emission: match args.grid_emission {
             EmissionArg::MeanNormal => GridEmission::MeanNormal,
@@ -227,13 +235,11 @@ fn slc_settings(args: &RenderArgs, lgh: &LghSettings, exposure: f32) -> Result<S
             args.error_bound
         );
     }
-    if !(1..=16).contains(&args.interleave) {
-        bail!("--interleave {}: expected 1 to 16", args.interleave);
-    }
+    let interleave = args.interleave.unwrap_or(8);
     Ok(SlcSettings {
         error_bound: args.error_bound,
         exposure,
-        interleave: args.interleave,
+        interleave,
         tile: args.tile,
         shadow_samples: lgh.shadow_samples,
         frame_seed: args.frame_seed,

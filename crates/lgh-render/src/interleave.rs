@@ -155,35 +155,34 @@ pub fn discontinuities(g: &GBuffer, p: &BlurParams) -> Vec<bool> {
         .map(|i| {
             let (x, y) = (i % w, i / w);
             let hit = g.is_hit(i);
+            if !hit {
+                return false;
+            }
             let z = g.depth[i];
-            let grad = |j: usize| (g.depth[j] - z).abs();
-            let mut gmax: f32 = 0.0;
-            if x + 1 < w && hit && g.is_hit(i + 1) {
-                gmax = gmax.max(grad(i + 1));
-            }
-            if x > 0 && hit && g.is_hit(i - 1) {
-                gmax = gmax.max(grad(i - 1));
-            }
-            let gx = gmax;
-            let mut gy: f32 = 0.0;
-            if y + 1 < h && hit && g.is_hit(i + w) {
-                gy = gy.max(grad(i + w));
-            }
-            if y > 0 && hit && g.is_hit(i - w) {
-                gy = gy.max(grad(i - w));
-            }
-            // The smaller of the two one-sided differences per axis would be the gradient
-            // proper; the larger keeps the test conservative on slanted planes.
-            let scale = gx.min(gy).max(1e-4);
+            // Local depth slope per axis: the smaller one-sided difference, which at an edge
+            // is the one on this pixel's own surface (a screen-space derivative would
+            // straddle the edge). The test scale is the larger of the two axes' slopes.
+            let slope = |a: Option<usize>, b: Option<usize>| {
+                [a, b]
+                    .into_iter()
+                    .flatten()
+                    .filter(|&j| g.is_hit(j))
+                    .map(|j| (g.depth[j] - z).abs())
+                    .fold(f32::INFINITY, f32::min)
+            };
+            let gx = slope((x > 0).then(|| i - 1), (x + 1 < w).then_some(i + 1));
+            let gy = slope((y > 0).then(|| i - w), (y + 1 < h).then_some(i + w));
+            let finite = |v: f32| if v.is_finite() { v } else { 0.0 };
+            let scale = finite(gx).max(finite(gy)).max(1e-4);
             let mut disc = false;
             for (dx, dy) in [(1usize, 0usize), (0, 1), (1, 1)] {
                 if x + dx >= w || y + dy >= h {
                     continue;
                 }
                 let j = i + dy * w + dx;
-                if hit != g.is_hit(j) {
+                if !g.is_hit(j) {
                     disc = true;
-                } else if hit {
+                } else {
                     let dz = (g.depth[j] - z).abs() / scale;
                     let dn = 1.0 - g.normal[i].dot(g.normal[j]);
                     disc |= dz > p.z_diff || dn > p.n_diff;
@@ -238,6 +237,12 @@ pub fn blur(img: &[Vec3], g: &GBuffer, disc: &[bool], p: &BlurParams) -> Vec<Vec
     };
     let horizontal = pass(img, 1, w, &|i| i % w);
     pass(&horizontal, w, h, &|i| i / w)
+}
+
+/// Recombines interleaved sub-image estimates: [`discontinuities`] then [`blur`].
+#[must_use]
+pub fn recombine(img: &[Vec3], g: &GBuffer, p: &BlurParams) -> Vec<Vec3> {
+    blur(img, g, &discontinuities(g, p), p)
 }
 
 #[cfg(test)]

@@ -10,6 +10,10 @@
 //!    cosine e_j is max(0, -m_j . w) + (1 - |m_j|) / 4 for the mean normal m_j by default
 //!    ([`GridEmission`]; max(0, -m_j . w) alone is the demo's, which loses light where normals
 //!    disagree). The number of lights whose sphere covers the pixel is its overdraw (Fig. 5).
+//!    With n x n interleaved sampling (4.3, `interleave` > 1), the lights of each level are
+//!    dealt to the n^2 sub-images (light k to k mod n^2), each pixel sums only its
+//!    sub-image's lights with n^2 times their intensity, and A, S and U are recombined by the
+//!    discontinuity-aware blur of [`crate::interleave`] before the shadow filter.
 //! 3. **Shadow sample selection** (3.3, Appendix A): while shading, each pixel keeps k
 //!    single-slot reservoirs; every light of level >= the shadow level (2 by default, 4.1,
 //!    Fig. 3) is offered with weight f_j = luminance of its unshadowed contribution at a
@@ -37,10 +41,11 @@ use rayon::prelude::*;
 
 use crate::frame::Timings;
 use crate::gbuffer::GBuffer;
+use crate::interleave::{self, BlurParams};
 use crate::ratio::{
     ShadowReservoirs, ShadowSample, ShadowSettings, halves, offer, shadowed_indirect,
 };
-use crate::tiles::TileBins;
+use crate::tiles::InterleavedBins;
 use crate::world::World;
 
 /// Random-stream tag of the LGH lighting pass.
@@ -62,8 +67,12 @@ pub struct LghSettings {
     pub start_level: u32,
     /// A-trous passes on the shadow estimates, 0 = no filter (`--filter`, `--filter-passes`).
     pub filter_passes: u32,
-    /// Screen tile size in pixels for light binning.
+    /// Screen tile size in (sub-image) pixels for light binning (`--tile`).
     pub tile: u32,
+    /// n of n x n interleaved sampling, 1 = none (`--interleave`; paper 4.3: 2 or 4).
+    pub interleave: u32,
+    /// The discontinuity-aware blur after interleaved shading.
+    pub blur: BlurParams,
     /// Scale of the shadow-sample jitter (the demo's DevScale, 0.5).
     pub dev_scale: f32,
     /// Construction of levels >= 2.
@@ -86,6 +95,8 @@ impl Default for LghSettings {
             start_level: 1,
             filter_passes: 5,
             tile: 16,
+            interleave: 1,
+            blur: BlurParams::defaults(),
             dev_scale: 0.5,
             construction: Construction::GatherFromS1,
             normal_bins: false,
@@ -133,6 +144,8 @@ struct ShadeLights {
     intensity: Vec<Vec3>,
     deviation: Vec<Vec3>,
     level: Vec<u8>,
+    /// Sub-image of interleaved sampling: within each level, light k goes to k mod n^2.
+    sub: Vec<u16>,
     radius: Vec<f32>,
     role: Vec<LevelRole>,
     reach: Vec<f32>,
@@ -147,6 +160,7 @@ impl ShadeLights {
         lowest: u32,
         alpha: f32,
         emission: GridEmission,
+        n2: usize,
     ) {
         let geom = grid.geometry;
         let l_max = geom.l_max;
@@ -175,6 +189,7 @@ impl ShadeLights {
                     .extend(std::iter::repeat_n(Vec3::ZERO, p.len())),
             }
             self.level.extend(std::iter::repeat_n(l as u8, p.len()));
+            self.sub.extend((0..p.len()).map(|k| (k % n2) as u16));
             self.radius.extend(std::iter::repeat_n(radius, p.len()));
             self.role.extend(std::iter::repeat_n(role, p.len()));
             self.reach
@@ -239,6 +254,9 @@ pub fn render_lgh(
         vec![vpls]
     };
     let lowest = settings.start_level.min(1);
+    let n = settings.interleave.max(1);
+    let n2 = (n * n) as usize;
+    let scale = n2 as f32;
     let mut lights = ShadeLights::default();
     let mut build_ms = 0.0;
     let mut lighting_ms = 0.0;
@@ -255,13 +273,21 @@ pub fn render_lgh(
         let start = Instant::now();
         out.grid_lights += grid.len();
         out.levels = out.levels.max(grid.l_max());
-        lights.add_hierarchy(grid, group, lowest, settings.alpha, settings.emission);
+        lights.add_hierarchy(grid, group, lowest, settings.alpha, settings.emission, n2);
         lighting_ms += start.elapsed().as_secs_f64() * 1e3;
     }
     t.push("lgh_build", build_ms);
     let lighting_start = Instant::now();
     out.shaded_lights = lights.position.len();
-    let bins = TileBins::build(g, frame, settings.tile, &lights.position, &lights.reach);
+    let bins = InterleavedBins::build(
+        g,
+        frame,
+        settings.tile,
+        n,
+        &lights.position,
+        &lights.reach,
+        &lights.sub,
+    );
 
     let k = if shadows {
         settings.shadow_samples.min(MAX_SHADOW_SAMPLES) as usize
@@ -288,8 +314,7 @@ pub fn render_lgh(
                 let mut rng = Rng::new(&[seed, i as u64, STREAM_LGH]);
                 let (a, overdraw) = px;
                 let res = layout.pixel_mut(row_res, x);
-                for &j in bins.lights_at(x as u32, y as u32) {
-                    let j = j as usize;
+                for j in bins.lights_at(x as u32, y as u32) {
                     let l = lights.level[j] as usize;
                     let p = lights.position[j];
                     let d = (p - xp).length();
@@ -301,7 +326,8 @@ pub fn render_lgh(
                     if b <= 0.0 {
                         continue;
                     }
-                    let (nj, ij, iso) = (lights.normal[j], lights.intensity[j], lights.iso[j]);
+                    let (nj, iso) = (lights.normal[j], lights.iso[j]);
+                    let ij = lights.intensity[j] * scale;
                     let c = light_irradiance(xp, n, p, nj, iso, ij, eps2);
                     if c == Vec3::ZERO {
                         continue;
@@ -328,10 +354,14 @@ pub fn render_lgh(
         lighting_ms + lighting_start.elapsed().as_secs_f64() * 1e3,
     );
 
-    let a: Vec<Vec3> = shaded.iter().map(|p| p.0).collect();
+    let mut a: Vec<Vec3> = shaded.iter().map(|p| p.0).collect();
+    let blur = (n > 1).then_some(settings.blur);
+    if let Some(p) = &blur {
+        a = t.time("interleave_blur", || interleave::recombine(&a, g, p));
+    }
     let shadow = ShadowSettings {
         filter_passes: settings.filter_passes,
-        interleave_blur: None,
+        interleave_blur: blur,
     };
     (out.indirect, out.shadow_rays) = shadowed_indirect(world, g, &a, &reservoirs, &shadow, &mut t);
     out.timings = t;

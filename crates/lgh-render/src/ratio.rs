@@ -206,13 +206,10 @@ pub fn shadowed_indirect(
         .sum();
     let (s_f, u_f) = t.time("shadow_filter", || {
         let (s_hat, u_hat) = match &settings.interleave_blur {
-            Some(p) => {
-                let disc = interleave::discontinuities(g, p);
-                (
-                    interleave::blur(&s_hat, g, &disc, p),
-                    interleave::blur(&u_hat, g, &disc, p),
-                )
-            }
+            Some(p) => (
+                interleave::recombine(&s_hat, g, p),
+                interleave::recombine(&u_hat, g, p),
+            ),
             None => (s_hat, u_hat),
         };
         if settings.filter_passes > 0 {

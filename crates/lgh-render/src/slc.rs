@@ -32,9 +32,9 @@ use rayon::prelude::*;
 
 use crate::frame::Timings;
 use crate::gbuffer::GBuffer;
-use crate::interleave::{self, BlurParams, Lattice, sub_image_of};
+use crate::interleave::{self, BlurParams};
 use crate::ratio::{ShadowReservoirs, ShadowSample, ShadowSettings, offer, shadowed_indirect};
-use crate::tiles::TileBins;
+use crate::tiles::InterleavedBins;
 use crate::world::World;
 
 /// Random-stream tag of the SLC shading pass.
@@ -173,17 +173,17 @@ pub fn render_slc(
         light_ranges(vpls, mode, settings, scale, eps2)
     });
     // Step 2: per sub-image, its lights (i = s mod n^2) binned into its tiles.
-    let bins: Vec<TileBins> = t.time("culling", || {
-        Lattice::all(n)
-            .into_par_iter()
-            .enumerate()
-            .map(|(s, lattice)| {
-                let idx: Vec<usize> = (s..vpls.len()).step_by(n2).collect();
-                let centres: Vec<Vec3> = idx.iter().map(|&i| vpls.positions[i]).collect();
-                let radii: Vec<f32> = idx.iter().map(|&i| ranges.range[i]).collect();
-                TileBins::build_lattice(g, frame, settings.tile, lattice, &centres, &radii)
-            })
-            .collect()
+    let bins = t.time("culling", || {
+        let sub: Vec<u16> = (0..vpls.len()).map(|i| (i % n2) as u16).collect();
+        InterleavedBins::build(
+            g,
+            frame,
+            settings.tile,
+            n,
+            &vpls.positions,
+            &ranges.range,
+            &sub,
+        )
     });
     let k = if shadows {
         settings
@@ -209,12 +209,10 @@ pub fn render_slc(
                     continue;
                 }
                 let (xp, nx) = (g.position[i], g.normal[i]);
-                let s = sub_image_of(x as u32, y as u32, n);
                 let mut rng = Rng::new(&[seed, i as u64, STREAM_SLC]);
                 let res = layout.pixel_mut(row_res, x);
                 let (a, count) = px;
-                for &local in bins[s].lights_at(x as u32, y as u32) {
-                    let j = local as usize * n2 + s;
+                for j in bins.lights_at(x as u32, y as u32) {
                     let p = vpls.positions[j];
                     let d2 = (p - xp).length_squared();
                     let r = ranges.range[j];
@@ -247,10 +245,7 @@ pub fn render_slc(
     let mut a: Vec<Vec3> = shaded.into_iter().map(|p| p.0).collect();
     let blur = (n > 1).then_some(settings.blur);
     if let Some(p) = &blur {
-        a = t.time("interleave_blur", || {
-            let disc = interleave::discontinuities(g, p);
-            interleave::blur(&a, g, &disc, p)
-        });
+        a = t.time("interleave_blur", || interleave::recombine(&a, g, p));
     }
     let shadow = ShadowSettings {
         filter_passes: settings.filter_passes,

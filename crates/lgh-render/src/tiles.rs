@@ -168,3 +168,105 @@ pub fn screen_rect(
     let clamp_y = |v: f32| (v.max(0.0) as u32).min(height - 1);
     Some([clamp_x(lo_x), clamp_y(lo_y), clamp_x(hi_x), clamp_y(hi_y)])
 }
+
+/// Tile bins for n x n interleaved sampling: light i belongs to sub-image `sub[i]`, and each
+/// sub-image bins only its own lights ([`TileBins::build_lattice`]). With n = 1 it is one
+/// [`TileBins`] over all lights.
+#[derive(Clone, Debug, Default)]
+pub struct InterleavedBins {
+    n: u32,
+    /// Per sub-image, the global indices of its lights (ascending).
+    members: Vec<Vec<u32>>,
+    bins: Vec<TileBins>,
+}
+
+impl InterleavedBins {
+    /// Bins spheres (`centres[i]`, `radii[i]`) of sub-image `sub[i]` (< n^2) into the tiles
+    /// of their sub-image, in parallel over sub-images.
+    #[must_use]
+    pub fn build(
+        g: &GBuffer,
+        frame: &CameraFrame,
+        tile: u32,
+        n: u32,
+        centres: &[Vec3],
+        radii: &[f32],
+        sub: &[u16],
+    ) -> Self {
+        use rayon::prelude::*;
+        let n = n.max(1);
+        let mut members = vec![Vec::new(); (n * n) as usize];
+        for (i, &s) in sub.iter().enumerate() {
+            members[usize::from(s)].push(i as u32);
+        }
+        let bins = Lattice::all(n)
+            .into_par_iter()
+            .zip(&members)
+            .map(|(lattice, m)| {
+                let c: Vec<Vec3> = m.iter().map(|&i| centres[i as usize]).collect();
+                let r: Vec<f32> = m.iter().map(|&i| radii[i as usize]).collect();
+                TileBins::build_lattice(g, frame, tile, lattice, &c, &r)
+            })
+            .collect();
+        Self { n, members, bins }
+    }
+
+    /// The global indices of the lights listed for full-resolution pixel (x, y) in its
+    /// sub-image's tile.
+    #[inline]
+    pub fn lights_at(&self, x: u32, y: u32) -> impl Iterator<Item = usize> + '_ {
+        let s = crate::interleave::sub_image_of(x, y, self.n);
+        let m = &self.members[s];
+        self.bins[s]
+            .lights_at(x, y)
+            .iter()
+            .map(move |&local| m[local as usize] as usize)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lgh_scene::camera::Camera;
+
+    /// Every light belongs to exactly one sub-image: over the n^2 pixels of one interleaving
+    /// block, lights of infinite radius (listed everywhere) are each seen exactly once.
+    #[test]
+    fn interleaved_bins_list_every_light_in_exactly_one_sub_image() {
+        let (w, h) = (16u32, 8u32);
+        let n_px = (w * h) as usize;
+        let g = GBuffer {
+            width: w,
+            height: h,
+            position: vec![Vec3::ZERO; n_px],
+            normal: vec![Vec3::Z; n_px],
+            geo_normal: vec![Vec3::Z; n_px],
+            albedo: vec![Vec3::ONE; n_px],
+            depth: vec![1.0; n_px],
+            emission: vec![Vec3::ZERO; n_px],
+        };
+        let camera = Camera {
+            position: Vec3::new(0.0, 0.0, 5.0),
+            look_at: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y_degrees: 40.0,
+        };
+        let frame = camera.frame(w, h);
+        let count = 37;
+        let centres: Vec<Vec3> = (0..count).map(|i| Vec3::splat(i as f32 * 0.01)).collect();
+        let radii = vec![f32::INFINITY; count];
+        for n in [1u32, 2, 4] {
+            let sub: Vec<u16> = (0..count).map(|i| (i % (n * n) as usize) as u16).collect();
+            let bins = InterleavedBins::build(&g, &frame, 4, n, &centres, &radii, &sub);
+            let mut seen = vec![0u32; count];
+            for y in 0..n {
+                for x in 0..n {
+                    for j in bins.lights_at(x + n, y) {
+                        seen[j] += 1;
+                    }
+                }
+            }
+            assert!(seen.iter().all(|&c| c == 1), "n = {n}: {seen:?}");
+        }
+    }
+}
