@@ -9,6 +9,7 @@ use lgh_core::lighting_grid::LevelCount;
 use lgh_core::vpl::GridEmission;
 use lgh_render::image::check_output_path;
 use lgh_render::lgh::{LghSettings, MAX_SHADOW_SAMPLES};
+use lgh_render::pt::PtSettings;
 use lgh_render::slc::SlcSettings;
 use lgh_render::{Component, Method, RenderSettings, World, render_frame};
 
@@ -31,6 +32,13 @@ pub enum MethodArg {
     Slc,
     /// Tiled lighting with light ranges clamped from the error bound (biased darker).
     SlcClamped,
+    /// Path tracing (all bounces, not VPLs) whose light sampling uses stochastic light
+    /// culling: bounding sphere tree, reservoir sampling, resampled importance sampling.
+    PtSlc,
+    /// Path tracing with uniform light sampling (baseline).
+    PtUniform,
+    /// Path tracing with clamped light ranges (biased baseline).
+    PtClamped,
 }
 
 /// Shadow filters.
@@ -67,7 +75,9 @@ pub enum ComponentArg {
 /// Render a scene to an image.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// Scene file: .toml (scene file), .gltf, .glb or .obj. Default: the built-in Cornell box.
+    /// Scene file: .toml (scene file), .gltf, .glb or .obj, or a built-in scene:
+    /// builtin:cornell (the default) or builtin:emitter-room (2688 emissive triangles, for the
+    /// pt methods).
     pub scene: Option<PathBuf>,
     /// How the indirect light is computed.
     #[arg(long, value_enum, default_value = "brute")]
@@ -128,10 +138,14 @@ pub struct RenderArgs {
     /// lgh: how a grid light's emission depends on direction.
     #[arg(long, value_enum, default_value = "energy")]
     pub grid_emission: EmissionArg,
-    /// slc: error bound epsilon_max of the light ranges (the paper's default 0.0005; smaller =
-    /// longer ranges, less noise, slower). The ranges also use --exposure.
-    #[arg(long, default_value_t = 0.0005)]
-    pub error_bound: f32,
+    /// slc, pt-*: error bound epsilon_max of the light ranges (smaller = longer ranges, less
+    /// noise, slower). Default: the paper's 0.0005 for slc, 0.125 for the path tracer. The
+    /// ranges also use --exposure.
+    #[arg(long)]
+    pub error_bound: Option<f32>,
+    /// pt-*: samples (passes) per pixel; every pass draws new light ranges.
+    #[arg(long, default_value_t = 16)]
+    pub spp: u32,
     /// lgh, slc: n x n interleaved sampling: each of the n^2 sub-images shades 1/n^2 of the
     /// lights (of each level, for lgh), then a discontinuity-aware blur recombines them.
     /// Default: 1 (none) for lgh, 8 for slc (the papers' settings).
@@ -195,6 +209,14 @@ fn lgh_settings(args: &RenderArgs) -> Result<LghSettings> {
             args.shadow_samples
         );
     }
+    if let Some(e) = args.error_bound
+        && (!e.is_finite() || e <= 0.0)
+    {
+        bail!("--error-bound {e}: must be a positive number");
+    }
+    if args.spp == 0 || args.spp > 1 << 20 {
+        bail!("--spp {}: expected 1 to 1048576", args.spp);
+    }
     if let Some(n) = args.interleave
         && !(1..=16).contains(&n)
     {
@@ -229,15 +251,9 @@ fn lgh_settings(args: &RenderArgs) -> Result<LghSettings> {
 
 /// The SLC settings from the flags (sharing the shadow flags with lgh), validated.
 fn slc_settings(args: &RenderArgs, lgh: &LghSettings, exposure: f32) -> Result<SlcSettings> {
-    if !args.error_bound.is_finite() || args.error_bound <= 0.0 {
-        bail!(
-            "--error-bound {}: must be a positive number",
-            args.error_bound
-        );
-    }
     let interleave = args.interleave.unwrap_or(8);
     Ok(SlcSettings {
-        error_bound: args.error_bound,
+        error_bound: args.error_bound.unwrap_or(0.0005),
         exposure,
         interleave,
         tile: args.tile,
@@ -295,6 +311,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             MethodArg::LghUnshadowed => Method::LghUnshadowed,
             MethodArg::Slc => Method::Slc,
             MethodArg::SlcClamped => Method::SlcClamped,
+            MethodArg::PtSlc => Method::PtSlc,
+            MethodArg::PtUniform => Method::PtUniform,
+            MethodArg::PtClamped => Method::PtClamped,
         },
         component: match args.component {
             ComponentArg::All => Component::All,
@@ -302,6 +321,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             ComponentArg::Indirect => Component::Indirect,
         },
         slc: slc_settings(args, &lgh, exposure)?,
+        pt: PtSettings {
+            spp: args.spp,
+            error_bound: args.error_bound.unwrap_or(0.125),
+            exposure,
+            ..PtSettings::default()
+        },
         lgh,
         ..RenderSettings::default()
     };
@@ -344,6 +369,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             stats["shadow_rays"] = l.shadow_rays.into();
             stats["alpha"] = f64::from(settings.lgh.alpha).into();
             stats["shadow_samples"] = settings.lgh.shadow_samples.into();
+        }
+        if let Some(p) = &frame.pt {
+            stats["spp"] = p.spp.into();
+            stats["emitters"] = p.emitters.into();
+            stats["avg_overlapping_lights"] = p.avg_overlapping.into();
+            stats["error_bound"] = f64::from(settings.pt.error_bound).into();
         }
         if let Some(l) = &frame.slc {
             stats["avg_lights_per_pixel"] = l.avg_lights_per_pixel.into();

@@ -5,16 +5,32 @@ use std::path::Path;
 use anyhow::Result;
 use lgh_scene::Scene;
 
-/// Loads `path`, or builds the default Cornell box when there is none. Warnings from loading
-/// go to stderr.
+/// Names of the built-in scenes, usable as `builtin:NAME` in place of a file.
+pub const BUILTIN: [&str; 2] = ["cornell", "emitter-room"];
+
+/// Loads `path`, or builds the default Cornell box when there is none; `builtin:cornell` and
+/// `builtin:emitter-room` name the built-in scenes. Warnings from loading go to stderr.
 pub fn load_scene(path: Option<&Path>) -> Result<Scene> {
-    let scene = match path {
-        Some(p) => lgh_scene::load(p)?,
-        None => {
-            let mut s = lgh_scene::cornell::cornell_box();
-            s.finish(Path::new("<built-in cornell box>"))?;
+    let builtin = match path.and_then(Path::to_str) {
+        None if path.is_none() => Some("cornell"),
+        Some(p) => p.strip_prefix("builtin:"),
+        None => None,
+    };
+    let scene = match (builtin, path) {
+        (Some(name), _) => {
+            let mut s = match name {
+                "cornell" => lgh_scene::cornell::cornell_box(),
+                "emitter-room" => lgh_scene::emitter_room::emitter_room(32),
+                _ => anyhow::bail!(
+                    "builtin:{name}: no such built-in scene (expected one of: {})",
+                    BUILTIN.join(", ")
+                ),
+            };
+            s.finish(Path::new(&format!("<built-in {name}>")))?;
             s
         }
+        (None, Some(p)) => lgh_scene::load(p)?,
+        (None, None) => anyhow::bail!("no scene"),
     };
     if scene.report.degenerate_triangles > 0 {
         eprintln!(

@@ -12,6 +12,7 @@
 //! | [`lighting_grid`] | the lighting grid hierarchy, built in parallel | LGH 2019 section 3.1 |
 //! | [`blending`] | blending functions B_l(d), radii r_l = alpha h_l | LGH 2019 section 2.2, Fig. 2 |
 //! | [`light_range`] | stochastic and clamped light ranges | SLC 2016 sections 3.1-3.2, Appendix A |
+//! | [`sphere_tree`] | bounding sphere tree of light influence regions | SLC 2016 section 5.2 |
 //! | [`reservoir`] | streaming weighted selection of shadow samples | LGH 2019 section 3.3, Appendix A |
 //!
 //! Everything here is plain data plus functions, so that other engines can use it with their
@@ -29,6 +30,7 @@ pub mod lighting_grid;
 pub mod reservoir;
 pub mod rng;
 pub mod sampling;
+pub mod sphere_tree;
 pub mod timing;
 pub mod vpl;
 

@@ -21,6 +21,7 @@ use crate::gbuffer::GBuffer;
 use crate::image::Image;
 use crate::lgh::{LghSettings, render_lgh};
 use crate::progress::Progress;
+use crate::pt::{LightSampling, PtSettings, render_pt};
 use crate::slc::{RangeMode, SlcSettings, render_slc};
 use crate::vpl_gen::{VplSet, generate_vpls};
 use crate::world::World;
@@ -41,6 +42,13 @@ pub enum Method {
     Slc,
     /// Tiled lighting with clamped light ranges (the biased baseline of the same paper).
     SlcClamped,
+    /// Path tracing with stochastic light culling for many area lights (SLC section 5); the
+    /// image holds the path-traced radiance, not VPL lighting.
+    PtSlc,
+    /// Path tracing with uniform light sampling.
+    PtUniform,
+    /// Path tracing with clamped light ranges.
+    PtClamped,
 }
 
 impl Method {
@@ -54,7 +62,16 @@ impl Method {
             Method::LghUnshadowed => "lgh-unshadowed",
             Method::Slc => "slc",
             Method::SlcClamped => "slc-clamped",
+            Method::PtSlc => "pt-slc",
+            Method::PtUniform => "pt-uniform",
+            Method::PtClamped => "pt-clamped",
         }
+    }
+
+    /// The path-tracing methods, which need no VPLs.
+    #[must_use]
+    pub fn is_path_tracer(self) -> bool {
+        matches!(self, Method::PtSlc | Method::PtUniform | Method::PtClamped)
     }
 }
 
@@ -95,6 +112,8 @@ pub struct RenderSettings {
     pub lgh: LghSettings,
     /// Settings of the `slc` methods.
     pub slc: SlcSettings,
+    /// Settings of the `pt` methods.
+    pub pt: PtSettings,
 }
 
 impl Default for RenderSettings {
@@ -111,6 +130,7 @@ impl Default for RenderSettings {
             clamp_fraction: 0.01,
             lgh: LghSettings::default(),
             slc: SlcSettings::default(),
+            pt: PtSettings::default(),
         }
     }
 }
@@ -138,6 +158,19 @@ pub struct Frame {
     pub lgh: Option<LghStats>,
     /// Statistics of the `slc` methods.
     pub slc: Option<SlcStats>,
+    /// Statistics of the `pt` methods.
+    pub pt: Option<PtStats>,
+}
+
+/// Statistics of a `pt` frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PtStats {
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Emissive triangles.
+    pub emitters: usize,
+    /// Mean number of lights whose influence sphere held a shading point.
+    pub avg_overlapping: f64,
 }
 
 /// Statistics of an `slc` frame.
@@ -187,6 +220,9 @@ pub fn render_frame(
     let (w, h) = (s.width, s.height);
     let camera = world.scene.camera().frame(w, h);
     let g = t.time("gbuffer", || GBuffer::render(world, &camera, w, h));
+    if s.method.is_path_tracer() {
+        return Ok(path_traced_frame(world, s, &g, t, start, progress));
+    }
     let vpls = t.time("vpl_generation", || {
         generate_vpls(world, s.vpls, s.bounces, s.seed)
     });
@@ -246,6 +282,7 @@ pub fn render_frame(
                 sub_timings = out.timings.0;
                 out.indirect
             }
+            Method::PtSlc | Method::PtUniform | Method::PtClamped => Vec::new(),
         })
     })?;
     let emission = Image::from_pixels(w, h, g.emission.clone());
@@ -276,5 +313,56 @@ pub fn render_frame(
         timings: t,
         lgh: lgh_stats,
         slc: slc_stats,
+        pt: None,
     })
+}
+
+/// A `pt` frame: emission from the G-buffer, and everything reflected (direct and indirect,
+/// every bounce) path traced into `indirect`; `direct` is zero and there are no VPLs.
+fn path_traced_frame(
+    world: &World,
+    s: &RenderSettings,
+    g: &GBuffer,
+    mut t: Timings,
+    start: Instant,
+    progress: &dyn Progress,
+) -> Frame {
+    let (w, h) = (s.width, s.height);
+    let mode = match s.method {
+        Method::PtUniform => LightSampling::Uniform,
+        Method::PtClamped => LightSampling::Clamped,
+        _ => LightSampling::Slc,
+    };
+    let out = t.time("path_tracing", || {
+        render_pt(world, g, mode, &s.pt, s.seed, progress)
+    });
+    let emission = Image::from_pixels(w, h, g.emission.clone());
+    let indirect = Image::from_pixels(w, h, out.radiance);
+    let image = Image::from_pixels(
+        w,
+        h,
+        (0..g.len())
+            .map(|i| match s.component {
+                Component::All => emission.pixels[i] + indirect.pixels[i],
+                Component::Direct => emission.pixels[i],
+                Component::Indirect => indirect.pixels[i],
+            })
+            .collect(),
+    );
+    t.0.push(("total".into(), start.elapsed().as_secs_f64() * 1e3));
+    Frame {
+        image,
+        emission,
+        direct: Image::new(w, h),
+        indirect,
+        vpls: VplSet::default(),
+        timings: t,
+        lgh: None,
+        slc: None,
+        pt: Some(PtStats {
+            spp: s.pt.spp,
+            emitters: world.lights.emitters.len(),
+            avg_overlapping: out.avg_overlapping,
+        }),
+    }
 }

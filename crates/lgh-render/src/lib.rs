@@ -17,6 +17,7 @@
 //! | [`atrous`] | edge-avoiding a-trous filter |
 //! | [`interleave`] | interleaved sampling: sub-image lattices, split/merge, discontinuity-aware blur |
 //! | [`slc`] | stochastic light culling: stochastic and clamped tiled lighting |
+//! | [`pt`] | progressive path tracing with many area lights: SLC light sampling and baselines |
 //! | [`ratio`] | ray-traced shadows through the ratio estimator (shared by LGH and SLC) |
 //! | [`frame`] | the passes in order, with timings |
 //! | [`image`], [`tonemap`], [`metrics`] | EXR/PNG files, tone mapping, image differences |
@@ -43,6 +44,7 @@ pub mod lights;
 pub mod metrics;
 pub mod passes;
 pub mod progress;
+pub mod pt;
 pub mod ratio;
 pub mod raybench;
 pub mod slc;
@@ -52,7 +54,8 @@ pub mod vpl_gen;
 pub mod world;
 
 pub use frame::{
-    Component, Frame, LghStats, Method, RenderError, RenderSettings, SlcStats, render_frame,
+    Component, Frame, LghStats, Method, PtStats, RenderError, RenderSettings, SlcStats,
+    render_frame,
 };
 pub use image::Image;
 pub use progress::{Progress, Silent};

@@ -22,6 +22,7 @@
 
 pub mod camera;
 pub mod cornell;
+pub mod emitter_room;
 pub mod error;
 pub mod gltf_file;
 pub mod light;
