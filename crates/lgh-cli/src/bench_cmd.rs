@@ -30,6 +30,13 @@ pub enum BenchWhat {
     /// render times without shadows, with 1 and with 4 shadow samples, with the per-pass
     /// breakdown.
     Render(crate::bench_render::RenderBenchArgs),
+    /// Stochastic light culling (Tokuyoshi & Harada 2016): slc, slc-clamped and LGH against
+    /// the brute force at 16K-262K VPLs (time, lights per pixel, error; clamped also at equal
+    /// time), and the area-light path tracer against uniform light sampling at equal time.
+    Slc(crate::bench_slc::SlcBenchArgs),
+    /// Flicker of a static view with VPLs regenerated every frame, without and with temporal
+    /// filtering (LGH paper 4.3), and the time per frame.
+    Temporal(crate::bench_temporal::TemporalBenchArgs),
 }
 
 /// Arguments of `lgh bench rays`.
@@ -53,6 +60,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         BenchWhat::Rays(a) => rays(a),
         BenchWhat::Build(a) => crate::bench_build::run(a),
         BenchWhat::Render(a) => crate::bench_render::run(a),
+        BenchWhat::Slc(a) => crate::bench_slc::run(a),
+        BenchWhat::Temporal(a) => crate::bench_temporal::run(a),
     }
 }
 

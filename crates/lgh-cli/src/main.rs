@@ -10,6 +10,8 @@
 mod bench_build;
 mod bench_cmd;
 mod bench_render;
+mod bench_slc;
+mod bench_temporal;
 mod diff_cmd;
 mod heatmap;
 mod progress_bar;

@@ -10,7 +10,9 @@ use lgh_core::vpl::GridEmission;
 use lgh_render::image::check_output_path;
 use lgh_render::lgh::{LghSettings, MAX_SHADOW_SAMPLES};
 use lgh_render::pt::PtSettings;
+use lgh_render::sequence::Sequence;
 use lgh_render::slc::SlcSettings;
+use lgh_render::temporal::{TemporalSettings, TemporalTarget};
 use lgh_render::{Component, Method, RenderSettings, World, render_frame};
 
 use crate::progress_bar::Bars;
@@ -61,6 +63,15 @@ pub enum EmissionArg {
     Energy,
 }
 
+/// What the temporal filter accumulates.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum TaaTargetArg {
+    /// The filtered shadow ratio (lgh, slc).
+    Ratio,
+    /// The whole indirect light.
+    Indirect,
+}
+
 /// Parts of the radiance to write.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum ComponentArg {
@@ -76,8 +87,9 @@ pub enum ComponentArg {
 #[derive(Debug, Args)]
 pub struct RenderArgs {
     /// Scene file: .toml (scene file), .gltf, .glb or .obj, or a built-in scene:
-    /// builtin:cornell (the default) or builtin:emitter-room (2688 emissive triangles, for the
-    /// pt methods).
+    /// builtin:cornell (the default), builtin:cornell-moving-light (animated: a point light
+    /// crosses the room in 2 s) or builtin:emitter-room (2688 emissive triangles, for the pt
+    /// methods).
     pub scene: Option<PathBuf>,
     /// How the indirect light is computed.
     #[arg(long, value_enum, default_value = "brute")]
@@ -161,12 +173,65 @@ pub struct RenderArgs {
     /// legend bar to this PNG (the paper's Fig. 5).
     #[arg(long)]
     pub heatmap: Option<PathBuf>,
+    /// Render a sequence of frames A..B (B excluded, e.g. 0..48) of the scene's animation;
+    /// --out must then contain #### (replaced by the zero-padded frame number). VPLs and all
+    /// random numbers are new in every frame (seed + frame number).
+    #[arg(long, value_parser = parse_frames)]
+    pub frames: Option<(u32, u32)>,
+    /// Frames per second of the sequence (frame f shows time f / fps).
+    #[arg(long, default_value_t = 24.0)]
+    pub fps: f32,
+    /// Temporal filtering of the shadows across the frames of a sequence (LGH paper 4.3).
+    #[arg(long)]
+    pub taa: bool,
+    /// Weight of the current frame in the temporal moving average.
+    #[arg(long, default_value_t = 0.1)]
+    pub taa_alpha: f32,
+    /// What the temporal filter accumulates: the shadow ratio (the paper's choice) or the
+    /// whole indirect light.
+    #[arg(long, value_enum, default_value = "ratio")]
+    pub taa_target: TaaTargetArg,
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
     /// No progress bars and no summary.
     #[arg(long, short)]
     pub quiet: bool,
+}
+
+/// Parses `A..B` (frames A to B - 1).
+pub fn parse_frames(s: &str) -> Result<(u32, u32), String> {
+    let (a, b) = s
+        .split_once("..")
+        .ok_or_else(|| format!("'{s}' is not A..B (e.g. 0..48)"))?;
+    let a: u32 = a
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}': A is not a number"))?;
+    let b: u32 = b
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}': B is not a number"))?;
+    if b <= a {
+        return Err(format!("'{s}': B must be larger than A"));
+    }
+    Ok((a, b))
+}
+
+/// The output path of frame `f`: the run of '#' in `pattern` replaced by `f`, zero-padded to
+/// the run's length.
+#[must_use]
+pub fn frame_path(pattern: &std::path::Path, f: u32) -> PathBuf {
+    let text = pattern.to_string_lossy();
+    let Some(start) = text.find('#') else {
+        return pattern.to_path_buf();
+    };
+    let len = text[start..].chars().take_while(|&c| c == '#').count();
+    let mut out = String::new();
+    out.push_str(&text[..start]);
+    out.push_str(&format!("{f:0len$}"));
+    out.push_str(&text[start + len..]);
+    PathBuf::from(out)
 }
 
 /// Parses `WIDTHxHEIGHT` with both sides positive.
@@ -264,8 +329,70 @@ fn slc_settings(args: &RenderArgs, lgh: &LghSettings, exposure: f32) -> Result<S
     })
 }
 
+/// `--frames`: renders the sequence, one image per frame.
+fn run_sequence(
+    args: &RenderArgs,
+    mut world: World,
+    settings: &RenderSettings,
+    (first, end): (u32, u32),
+    exposure: f32,
+    bars: &Bars,
+) -> Result<()> {
+    let taa = args.taa.then_some(TemporalSettings {
+        alpha: args.taa_alpha,
+        target: match args.taa_target {
+            TaaTargetArg::Ratio => TemporalTarget::ShadowRatio,
+            TaaTargetArg::Indirect => TemporalTarget::Indirect,
+        },
+        ..TemporalSettings::default()
+    });
+    let mut seq = Sequence::new(taa);
+    let mut per_frame = Vec::new();
+    for f in first..end {
+        world.set_time(f as f32 / args.fps);
+        let mut s = settings.clone();
+        s.seed = settings.seed.wrapping_add(u64::from(f));
+        s.slc.frame_seed = f;
+        let frame = seq.render(&world, &s, bars)?;
+        let path = frame_path(&args.out, f);
+        frame.image.save(&path, exposure)?;
+        let ms = frame.timings.get("total").unwrap_or(0.0);
+        per_frame.push(serde_json::json!({"frame": f, "total_ms": ms}));
+        if !args.quiet {
+            eprintln!("frame {f}: {ms:.0} ms -> {}", path.display());
+        }
+    }
+    if let Some(path) = &args.stats {
+        let v = serde_json::json!({
+            "scene": world.scene.name,
+            "method": settings.method.name(),
+            "frames": per_frame,
+            "fps": args.fps,
+            "taa": args.taa,
+        });
+        std::fs::write(path, serde_json::to_string_pretty(&v)? + "\n")
+            .with_context(|| format!("{}: cannot write statistics", path.display()))?;
+    }
+    Ok(())
+}
+
 pub fn run(args: &RenderArgs) -> Result<()> {
-    check_output_path(&args.out)?;
+    if args.frames.is_some() && !args.out.to_string_lossy().contains('#') {
+        bail!(
+            "{}: with --frames the output name needs #### for the frame number (e.g. frames/frame_####.png)",
+            args.out.display()
+        );
+    }
+    if !args.taa_alpha.is_finite() || args.taa_alpha <= 0.0 || args.taa_alpha > 1.0 {
+        bail!(
+            "--taa-alpha {}: expected a number in (0, 1]",
+            args.taa_alpha
+        );
+    }
+    if !args.fps.is_finite() || args.fps <= 0.0 {
+        bail!("--fps {}: must be a positive number", args.fps);
+    }
+    check_output_path(&frame_path(&args.out, 0))?;
     if let Some(stats) = &args.stats
         && let Some(dir) = stats.parent()
         && !dir.as_os_str().is_empty()
@@ -331,6 +458,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         ..RenderSettings::default()
     };
     let bars = Bars::new(args.quiet);
+    if let Some(frames) = args.frames {
+        return run_sequence(args, world, &settings, frames, exposure, &bars);
+    }
     let frame = render_frame(&world, &settings, &bars)?;
     frame.image.save(&args.out, exposure)?;
     if let (Some(path), Some(stats)) = (&args.heatmap, &frame.lgh) {

@@ -25,6 +25,7 @@ use crate::pt::{LightSampling, PtSettings, render_pt};
 use crate::slc::{RangeMode, SlcSettings, render_slc};
 use crate::vpl_gen::{VplSet, generate_vpls};
 use crate::world::World;
+use lgh_scene::camera::CameraFrame;
 
 /// How the indirect light (the VPLs' contribution) is computed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -160,6 +161,38 @@ pub struct Frame {
     pub slc: Option<SlcStats>,
     /// Statistics of the `pt` methods.
     pub pt: Option<PtStats>,
+    /// The G-buffer the frame was shaded from.
+    pub gbuffer: GBuffer,
+    /// The camera of the frame.
+    pub camera: CameraFrame,
+    /// `lgh` and `slc`: the unshadowed sum A per pixel (before albedo / pi).
+    pub unshadowed: Option<Vec<Vec3>>,
+    /// `lgh` and `slc`: the filtered shadow ratio per pixel (1 without shadows).
+    pub shadow_ratio: Option<Vec<Vec3>>,
+}
+
+/// The output image of `component` from a frame's parts.
+fn compose(component: Component, emission: &Image, direct: &Image, indirect: &Image) -> Image {
+    let pixels = (0..emission.pixels.len())
+        .map(|i| {
+            let e = emission.pixels[i];
+            match component {
+                Component::All => e + direct.pixels[i] + indirect.pixels[i],
+                Component::Direct => e + direct.pixels[i],
+                Component::Indirect => indirect.pixels[i],
+            }
+        })
+        .collect();
+    Image::from_pixels(emission.width, emission.height, pixels)
+}
+
+impl Frame {
+    /// Replaces the indirect light (after a temporal filter, say) and rebuilds `image` for
+    /// `component`.
+    pub fn set_indirect(&mut self, indirect: Vec<Vec3>, component: Component) {
+        self.indirect = Image::from_pixels(self.indirect.width, self.indirect.height, indirect);
+        self.image = compose(component, &self.emission, &self.direct, &self.indirect);
+    }
 }
 
 /// Statistics of a `pt` frame.
@@ -221,7 +254,7 @@ pub fn render_frame(
     let camera = world.scene.camera().frame(w, h);
     let g = t.time("gbuffer", || GBuffer::render(world, &camera, w, h));
     if s.method.is_path_tracer() {
-        return Ok(path_traced_frame(world, s, &g, t, start, progress));
+        return Ok(path_traced_frame(world, s, g, t, start, progress));
     }
     let vpls = t.time("vpl_generation", || {
         generate_vpls(world, s.vpls, s.bounces, s.seed)
@@ -232,6 +265,7 @@ pub fn render_frame(
     let eps = s.clamp_fraction * world.radius;
     let mut lgh_stats = None;
     let mut slc_stats = None;
+    let (mut unshadowed, mut shadow_ratio) = (None, None);
     let indirect = t.time("indirect", || -> Result<Vec<Vec3>, RenderError> {
         Ok(match s.method {
             Method::Brute => render_brute(world, &g, &vpls.vpls, eps, true, progress),
@@ -256,6 +290,8 @@ pub fn render_frame(
                     shadow_rays: out.shadow_rays,
                 });
                 sub_timings = out.timings.0;
+                unshadowed = Some(out.unshadowed);
+                shadow_ratio = Some(out.ratio);
                 out.indirect
             }
             Method::Slc | Method::SlcClamped => {
@@ -280,6 +316,8 @@ pub fn render_frame(
                     shadow_rays: out.shadow_rays,
                 });
                 sub_timings = out.timings.0;
+                unshadowed = Some(out.unshadowed);
+                shadow_ratio = Some(out.ratio);
                 out.indirect
             }
             Method::PtSlc | Method::PtUniform | Method::PtClamped => Vec::new(),
@@ -288,20 +326,7 @@ pub fn render_frame(
     let emission = Image::from_pixels(w, h, g.emission.clone());
     let direct = Image::from_pixels(w, h, direct);
     let indirect = Image::from_pixels(w, h, indirect);
-    let image = Image::from_pixels(
-        w,
-        h,
-        (0..g.len())
-            .map(|i| {
-                let e = emission.pixels[i];
-                match s.component {
-                    Component::All => e + direct.pixels[i] + indirect.pixels[i],
-                    Component::Direct => e + direct.pixels[i],
-                    Component::Indirect => indirect.pixels[i],
-                }
-            })
-            .collect::<Vec<Vec3>>(),
-    );
+    let image = compose(s.component, &emission, &direct, &indirect);
     t.0.extend(sub_timings);
     t.0.push(("total".into(), start.elapsed().as_secs_f64() * 1e3));
     Ok(Frame {
@@ -314,6 +339,10 @@ pub fn render_frame(
         lgh: lgh_stats,
         slc: slc_stats,
         pt: None,
+        gbuffer: g,
+        camera,
+        unshadowed,
+        shadow_ratio,
     })
 }
 
@@ -322,7 +351,7 @@ pub fn render_frame(
 fn path_traced_frame(
     world: &World,
     s: &RenderSettings,
-    g: &GBuffer,
+    g: GBuffer,
     mut t: Timings,
     start: Instant,
     progress: &dyn Progress,
@@ -334,26 +363,17 @@ fn path_traced_frame(
         _ => LightSampling::Slc,
     };
     let out = t.time("path_tracing", || {
-        render_pt(world, g, mode, &s.pt, s.seed, progress)
+        render_pt(world, &g, mode, &s.pt, s.seed, progress)
     });
     let emission = Image::from_pixels(w, h, g.emission.clone());
     let indirect = Image::from_pixels(w, h, out.radiance);
-    let image = Image::from_pixels(
-        w,
-        h,
-        (0..g.len())
-            .map(|i| match s.component {
-                Component::All => emission.pixels[i] + indirect.pixels[i],
-                Component::Direct => emission.pixels[i],
-                Component::Indirect => indirect.pixels[i],
-            })
-            .collect(),
-    );
+    let direct = Image::new(w, h);
+    let image = compose(s.component, &emission, &direct, &indirect);
     t.0.push(("total".into(), start.elapsed().as_secs_f64() * 1e3));
     Frame {
         image,
         emission,
-        direct: Image::new(w, h),
+        direct,
         indirect,
         vpls: VplSet::default(),
         timings: t,
@@ -364,5 +384,9 @@ fn path_traced_frame(
             emitters: world.lights.emitters.len(),
             avg_overlapping: out.avg_overlapping,
         }),
+        gbuffer: g,
+        camera: world.scene.camera().frame(w, h),
+        unshadowed: None,
+        shadow_ratio: None,
     }
 }

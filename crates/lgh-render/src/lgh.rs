@@ -110,6 +110,10 @@ impl Default for LghSettings {
 pub struct LghOutput {
     /// Indirect radiance towards the camera.
     pub indirect: Vec<Vec3>,
+    /// The unshadowed sum A per pixel (without albedo / pi; recombined if interleaved).
+    pub unshadowed: Vec<Vec3>,
+    /// The filtered shadow ratio per pixel (1 without shadows).
+    pub ratio: Vec<Vec3>,
     /// Per-pixel overdraw: lights whose sphere covers the pixel.
     pub overdraw: Vec<u32>,
     /// Grid lights in the hierarchy (all levels).
@@ -363,7 +367,9 @@ pub fn render_lgh(
         filter_passes: settings.filter_passes,
         interleave_blur: blur,
     };
-    (out.indirect, out.shadow_rays) = shadowed_indirect(world, g, &a, &reservoirs, &shadow, &mut t);
+    let shadowed = shadowed_indirect(world, g, &a, &reservoirs, &shadow, &mut t);
+    (out.indirect, out.ratio, out.shadow_rays) = (shadowed.indirect, shadowed.ratio, shadowed.rays);
+    out.unshadowed = a;
     out.timings = t;
     Ok(out)
 }

@@ -18,6 +18,7 @@
 //! | [`interleave`] | interleaved sampling: sub-image lattices, split/merge, discontinuity-aware blur |
 //! | [`slc`] | stochastic light culling: stochastic and clamped tiled lighting |
 //! | [`pt`] | progressive path tracing with many area lights: SLC light sampling and baselines |
+//! | [`temporal`], [`sequence`] | temporal filtering of shadows; frame sequences and flicker |
 //! | [`ratio`] | ray-traced shadows through the ratio estimator (shared by LGH and SLC) |
 //! | [`frame`] | the passes in order, with timings |
 //! | [`image`], [`tonemap`], [`metrics`] | EXR/PNG files, tone mapping, image differences |
@@ -47,7 +48,9 @@ pub mod progress;
 pub mod pt;
 pub mod ratio;
 pub mod raybench;
+pub mod sequence;
 pub mod slc;
+pub mod temporal;
 pub mod tiles;
 pub mod tonemap;
 pub mod vpl_gen;

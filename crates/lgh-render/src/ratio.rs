@@ -150,10 +150,29 @@ pub struct ShadowSettings {
     pub interleave_blur: Option<BlurParams>,
 }
 
-/// Traces the shadow rays, filters and composites: returns the indirect radiance
-/// albedo / pi x A x D(S) / D(U) and the number of rays. `a` is the unshadowed sum per pixel
-/// (already blurred if interleaved). Timings `shadow_rays`, `shadow_filter` and `composite`
-/// go to `t`.
+/// What the shadow passes produce.
+#[derive(Clone, Debug, Default)]
+pub struct Shadowed {
+    /// Indirect radiance albedo / pi x A x ratio.
+    pub indirect: Vec<Vec3>,
+    /// The filtered shadow ratio D(S) / D(U) per pixel and channel (1 without shadows).
+    pub ratio: Vec<Vec3>,
+    /// Shadow rays traced.
+    pub rays: u64,
+}
+
+/// indirect = albedo / pi x A x ratio per pixel.
+#[must_use]
+pub fn composite(g: &GBuffer, a: &[Vec3], ratio: &[Vec3]) -> Vec<Vec3> {
+    (0..g.len())
+        .map(|i| g.albedo[i] * FRAC_1_PI * a[i] * ratio[i])
+        .collect()
+}
+
+/// Traces the shadow rays, filters and composites: the indirect radiance
+/// albedo / pi x A x D(S) / D(U), the ratio and the number of rays. `a` is the unshadowed sum
+/// per pixel (already blurred if interleaved). Timings `shadow_rays`, `shadow_filter` and
+/// `composite` go to `t`.
 #[must_use]
 pub fn shadowed_indirect(
     world: &World,
@@ -162,15 +181,17 @@ pub fn shadowed_indirect(
     reservoirs: &ShadowReservoirs,
     settings: &ShadowSettings,
     t: &mut Timings,
-) -> (Vec<Vec3>, u64) {
+) -> Shadowed {
     let n_px = g.len();
     let k = reservoirs.k();
-    let albedo_pi = |i: usize| g.albedo[i] * FRAC_1_PI;
     if k == 0 {
-        let out = t.time("composite", || {
-            (0..n_px).map(|i| albedo_pi(i) * a[i]).collect::<Vec<_>>()
-        });
-        return (out, 0);
+        let ratio = vec![Vec3::ONE; n_px];
+        let indirect = t.time("composite", || composite(g, a, &ratio));
+        return Shadowed {
+            indirect,
+            ratio,
+            rays: 0,
+        };
     }
     let (s_hat, u_hat): (Vec<Vec3>, Vec<Vec3>) = t.time("shadow_rays", || {
         (0..n_px)
@@ -222,17 +243,19 @@ pub fn shadowed_indirect(
             (s_hat, u_hat)
         }
     });
-    let out = t.time("composite", || {
-        (0..n_px)
-            .map(|i| {
-                let ratio = Vec3::select(
-                    u_f[i].cmpgt(Vec3::splat(1e-20)),
-                    (s_f[i] / u_f[i]).clamp(Vec3::ZERO, Vec3::ONE),
-                    Vec3::ONE,
-                );
-                albedo_pi(i) * a[i] * ratio
-            })
-            .collect()
-    });
-    (out, rays)
+    let ratio: Vec<Vec3> = (0..n_px)
+        .map(|i| {
+            Vec3::select(
+                u_f[i].cmpgt(Vec3::splat(1e-20)),
+                (s_f[i] / u_f[i]).clamp(Vec3::ZERO, Vec3::ONE),
+                Vec3::ONE,
+            )
+        })
+        .collect();
+    let indirect = t.time("composite", || composite(g, a, &ratio));
+    Shadowed {
+        indirect,
+        ratio,
+        rays,
+    }
 }

@@ -91,6 +91,10 @@ impl Default for SlcSettings {
 pub struct SlcOutput {
     /// Indirect radiance towards the camera.
     pub indirect: Vec<Vec3>,
+    /// The unshadowed sum A per pixel (without albedo / pi; recombined if interleaved).
+    pub unshadowed: Vec<Vec3>,
+    /// The filtered shadow ratio per pixel (1 without shadows).
+    pub ratio: Vec<Vec3>,
     /// Per pixel: lights evaluated (within their range) by the pixel's sub-image.
     pub lights_per_pixel: Vec<u32>,
     /// Shadow rays traced.
@@ -251,11 +255,13 @@ pub fn render_slc(
         filter_passes: settings.filter_passes,
         interleave_blur: blur,
     };
-    let (indirect, shadow_rays) = shadowed_indirect(world, g, &a, &reservoirs, &shadow, &mut t);
+    let shadowed = shadowed_indirect(world, g, &a, &reservoirs, &shadow, &mut t);
     SlcOutput {
-        indirect,
+        indirect: shadowed.indirect,
+        unshadowed: a,
+        ratio: shadowed.ratio,
         lights_per_pixel,
-        shadow_rays,
+        shadow_rays: shadowed.rays,
         timings: t,
     }
 }

@@ -24,6 +24,8 @@ pub struct World {
     pub radius: f32,
     /// Offset of ray origins from surfaces, along the geometric normal (1e-4 x radius).
     pub ray_epsilon: f32,
+    /// The scene's camera and lights at time 0, which the animation moves.
+    rest: (Option<lgh_scene::Camera>, Vec<lgh_scene::Light>),
 }
 
 /// The surface seen along a ray, with everything shading needs.
@@ -55,7 +57,9 @@ impl World {
             .collect();
         let (centre, radius) = scene.bounding_sphere();
         let lights = LightSet::new(&scene, radius);
+        let rest = (scene.camera.clone(), scene.lights.clone());
         Self {
+            rest,
             scene,
             accel,
             face_normals,
@@ -64,6 +68,18 @@ impl World {
             radius,
             ray_epsilon: 1e-4 * radius,
         }
+    }
+
+    /// Moves the camera and the lights to time `t` (seconds) of the scene's animation and
+    /// rebuilds the light tables; the geometry (and so the BVH) does not move.
+    pub fn set_time(&mut self, t: f32) {
+        if self.scene.animation.is_empty() {
+            return;
+        }
+        let anim = &self.scene.animation;
+        self.scene.camera = self.rest.0.as_ref().map(|c| anim.camera_at(c, t));
+        self.scene.lights = anim.lights_at(&self.rest.1, t);
+        self.lights = LightSet::new(&self.scene, self.radius);
     }
 
     /// The surface at `hit` seen along the unit direction `dir`.

@@ -11,8 +11,9 @@
 
 use glam::{Mat4, Vec2, Vec3};
 
+use crate::animation::{Animation, LightKey};
 use crate::mesh::Primitive;
-use crate::{Camera, Material, Scene};
+use crate::{Camera, Light, Material, Scene};
 
 const WHITE: Vec3 = Vec3::new(0.725, 0.71, 0.68);
 const RED: Vec3 = Vec3::new(0.63, 0.065, 0.05);
@@ -244,6 +245,41 @@ pub fn cornell_box() -> Scene {
         up: Vec3::Y,
         fov_y_degrees: 2.0 * (12.5f32 / 35.0).atan().to_degrees(),
     });
+    scene
+}
+
+/// The Cornell box lit by a point light that crosses the room under the ceiling from left
+/// to right in 2 seconds (the ceiling quad is dark): the animated default scene. The point
+/// light emits the quad's power (pi L A = 4 pi I).
+#[must_use]
+pub fn cornell_moving_light() -> Scene {
+    let mut scene = cornell_box();
+    scene.name = "cornell-moving-light".into();
+    for m in &mut scene.materials {
+        m.emission = Vec3::ZERO;
+    }
+    let area = 0.130 * 0.105;
+    scene.lights.push(Light::Point {
+        position: Vec3::new(0.08, 0.45, 0.28),
+        intensity: LIGHT_RADIANCE * (area / 4.0),
+    });
+    scene.animation = Animation {
+        camera: Vec::new(),
+        lights: vec![
+            LightKey {
+                light: 0,
+                time: 0.0,
+                position: Some(Vec3::new(0.08, 0.45, 0.28)),
+                direction: None,
+            },
+            LightKey {
+                light: 0,
+                time: 2.0,
+                position: Some(Vec3::new(0.48, 0.45, 0.28)),
+                direction: None,
+            },
+        ],
+    };
     scene
 }
 

@@ -20,6 +20,7 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+pub mod animation;
 pub mod camera;
 pub mod cornell;
 pub mod emitter_room;

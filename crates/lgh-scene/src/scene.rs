@@ -4,6 +4,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
+use crate::animation::Animation;
 use crate::{Camera, Light, Material, Mesh, SceneError, Texture};
 
 /// A scene in world space, ready to render.
@@ -25,6 +26,8 @@ pub struct Scene {
     pub exposure: f32,
     /// What loading found and fixed, for the user.
     pub report: SceneReport,
+    /// Motion over time (camera and light keyframes); empty for a still scene.
+    pub animation: Animation,
 }
 
 /// Facts found while loading, worth telling the user.
@@ -49,6 +52,7 @@ impl Scene {
             camera: None,
             exposure: 1.0,
             report: SceneReport::default(),
+            animation: Animation::default(),
         }
     }
 

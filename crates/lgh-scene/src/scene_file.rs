@@ -31,12 +31,15 @@
 //! ```
 //!
 //! The file's lights are added to the mesh's own (emissive materials, glTF punctual lights).
+//! An optional `[animation]` table moves the camera and the file's lights over time (see
+//! [`crate::animation`]).
 
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use serde::Deserialize;
 
+use crate::animation::{Animation, CameraKey, LightKey};
 use crate::{Camera, Light, Scene, SceneError};
 
 /// Name of the environment variable that points to the shared test scenes.
@@ -51,6 +54,33 @@ struct SceneFile {
     camera: Option<CameraDesc>,
     #[serde(default)]
     lights: Vec<LightDesc>,
+    animation: Option<AnimationDesc>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AnimationDesc {
+    #[serde(default)]
+    camera: Vec<CameraKeyDesc>,
+    #[serde(default)]
+    lights: Vec<LightKeyDesc>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraKeyDesc {
+    time: f32,
+    position: [f32; 3],
+    look_at: [f32; 3],
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightKeyDesc {
+    light: usize,
+    time: f32,
+    position: Option<[f32; 3]>,
+    direction: Option<[f32; 3]>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -116,6 +146,60 @@ impl LightDesc {
     }
 }
 
+/// The `[animation]` table: keyframes sorted by time, light numbers checked against the
+/// file's `[[lights]]` (offset by the mesh's own lights, which come first).
+fn animation(
+    path: &Path,
+    a: AnimationDesc,
+    first_light: usize,
+    file_lights: usize,
+) -> Result<Animation, SceneError> {
+    let finite = |v: &[f32]| v.iter().all(|x| x.is_finite());
+    let mut out = Animation::default();
+    for k in a.camera {
+        if !finite(&[k.time]) || !finite(&k.position) || !finite(&k.look_at) {
+            return Err(SceneError::new(
+                path,
+                "animation.camera: a keyframe has a non-finite number",
+            ));
+        }
+        out.camera.push(CameraKey {
+            time: k.time,
+            position: k.position.into(),
+            look_at: k.look_at.into(),
+        });
+    }
+    for k in a.lights {
+        if k.light >= file_lights {
+            return Err(SceneError::new(
+                path,
+                format!(
+                    "animation.lights: light {} does not exist (the file has {file_lights} [[lights]], numbered from 0)",
+                    k.light
+                ),
+            ));
+        }
+        let ok = finite(&[k.time])
+            && k.position.is_none_or(|p| finite(&p))
+            && k.direction.is_none_or(|d| finite(&d));
+        if !ok {
+            return Err(SceneError::new(
+                path,
+                "animation.lights: a keyframe has a non-finite number",
+            ));
+        }
+        out.lights.push(LightKey {
+            light: first_light + k.light,
+            time: k.time,
+            position: k.position.map(Vec3::from),
+            direction: k.direction.map(|d| Vec3::from(d).normalize_or_zero()),
+        });
+    }
+    out.camera.sort_by(|a, b| a.time.total_cmp(&b.time));
+    out.lights.sort_by(|a, b| a.time.total_cmp(&b.time));
+    Ok(out)
+}
+
 /// Resolves the `mesh` entry of a scene file: `$LGH_SCENES/...` (or `${LGH_SCENES}/...`)
 /// against that variable, anything else against the scene file's folder.
 ///
@@ -174,9 +258,70 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             fov_y_degrees: c.fov,
         });
     }
+    let first_file_light = scene.lights.len();
     scene
         .lights
         .extend(desc.lights.iter().map(LightDesc::to_light));
+    if let Some(a) = desc.animation {
+        scene.animation = animation(path, a, first_file_light, desc.lights.len())?;
+    }
     scene.finish(path)?;
     Ok(scene)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Writes a one-quad OBJ and a scene file with `extra` appended; returns the scene path.
+    fn write_scene(name: &str, extra: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("lgh-scene-file-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join("quad.obj"),
+            "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 3 2\nf 1 4 3\n",
+        )
+        .unwrap();
+        let text = format!(
+            "mesh = \"quad.obj\"\n[[lights]]\ntype = \"point\"\nposition = [0.5, 1.0, 0.5]\nintensity = [1.0, 1.0, 1.0]\n{extra}"
+        );
+        let path = dir.join("scene.toml");
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+
+    #[test]
+    fn animation_keyframes_load_and_move_the_light() {
+        let path = write_scene(
+            "ok",
+            "[[animation.lights]]\nlight = 0\ntime = 1.0\nposition = [1.0, 1.0, 0.5]\n\
+             [[animation.lights]]\nlight = 0\ntime = 0.0\nposition = [0.0, 1.0, 0.5]\n\
+             [[animation.camera]]\ntime = 0.0\nposition = [0.5, 3.0, 2.0]\nlook_at = [0.5, 0.0, 0.5]\n",
+        );
+        let scene = load(&path).unwrap();
+        assert_eq!(scene.animation.lights.len(), 2);
+        assert_eq!(scene.animation.lights[0].time, 0.0);
+        let lights = scene.animation.lights_at(&scene.lights, 0.5);
+        assert_eq!(
+            lights[0],
+            Light::Point {
+                position: Vec3::new(0.5, 1.0, 0.5),
+                intensity: Vec3::ONE
+            }
+        );
+    }
+
+    #[test]
+    fn animating_a_missing_light_is_an_error_naming_the_file() {
+        let path = write_scene(
+            "bad",
+            "[[animation.lights]]\nlight = 3\ntime = 0.0\nposition = [0.0, 1.0, 0.5]\n",
+        );
+        let err = load(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("scene.toml") && err.contains("light 3 does not exist"),
+            "{err}"
+        );
+    }
 }

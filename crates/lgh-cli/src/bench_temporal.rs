@@ -1,0 +1,128 @@
+//! `lgh bench temporal`: flicker of the indirect light of a static view whose VPLs are
+//! regenerated every frame (LGH paper 4.3), without and with temporal filtering.
+
+use std::path::PathBuf;
+
+use anyhow::{Result, anyhow};
+use clap::Args;
+use lgh_render::sequence::{Sequence, flicker};
+use lgh_render::temporal::{TemporalSettings, TemporalTarget};
+use lgh_render::{Component, Method, RenderSettings, Silent, World};
+
+use crate::render_cmd::parse_size;
+use crate::scene_arg::load_scene;
+
+/// Arguments of `lgh bench temporal`.
+#[derive(Debug, Args)]
+pub struct TemporalBenchArgs {
+    /// Scene (file or builtin:NAME). Default: the built-in Cornell box.
+    pub scene: Option<PathBuf>,
+    /// Frames per run (the first frames warm the history up and count too).
+    #[arg(long, default_value_t = 16)]
+    pub frames: u32,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "320x180", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// VPLs per frame.
+    #[arg(long, default_value_t = 10_000)]
+    pub vpls: usize,
+    /// Weight of the current frame in the moving average.
+    #[arg(long, default_value_t = 0.1)]
+    pub taa_alpha: f32,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Mean flicker over consecutive frames and mean frame time of one run.
+fn run_one(
+    world: &World,
+    base: &RenderSettings,
+    frames: u32,
+    taa: Option<TemporalSettings>,
+) -> Result<(f64, f64)> {
+    let mut seq = Sequence::new(taa);
+    let mut prev: Option<Vec<glam::Vec3>> = None;
+    let (mut sum, mut n, mut ms) = (0.0, 0u32, 0.0);
+    for f in 0..frames {
+        let s = RenderSettings {
+            seed: u64::from(f),
+            ..base.clone()
+        };
+        let frame = seq.render(world, &s, &Silent).map_err(|e| anyhow!("{e}"))?;
+        ms += frame.timings.get("total").unwrap_or(0.0);
+        if let Some(p) = &prev {
+            sum += flicker(p, &frame.indirect.pixels);
+            n += 1;
+        }
+        prev = Some(frame.indirect.pixels);
+    }
+    Ok((sum / f64::from(n.max(1)), ms / f64::from(frames.max(1))))
+}
+
+pub fn run(args: &TemporalBenchArgs) -> Result<()> {
+    let threads = crate::set_threads(args.threads)?;
+    let scene = load_scene(args.scene.as_deref())?;
+    let name = scene.name.clone();
+    let world = World::new(scene);
+    let base = RenderSettings {
+        width: args.size.0,
+        height: args.size.1,
+        vpls: args.vpls,
+        area_samples: 0,
+        method: Method::Lgh,
+        component: Component::Indirect,
+        ..RenderSettings::default()
+    };
+    let taa = |target| TemporalSettings {
+        alpha: args.taa_alpha,
+        target,
+        ..TemporalSettings::default()
+    };
+    let (without, ms) = run_one(&world, &base, args.frames, None)?;
+    let (with_ratio, ms_ratio) = run_one(
+        &world,
+        &base,
+        args.frames,
+        Some(taa(TemporalTarget::ShadowRatio)),
+    )?;
+    let (with_indirect, ms_ind) = run_one(
+        &world,
+        &base,
+        args.frames,
+        Some(taa(TemporalTarget::Indirect)),
+    )?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "scene": name,
+                "threads": threads,
+                "frames": args.frames,
+                "width": args.size.0,
+                "height": args.size.1,
+                "vpls": args.vpls,
+                "taa_alpha": args.taa_alpha,
+                "flicker_without_taa": without,
+                "flicker_with_taa": with_ratio,
+                "flicker_with_taa_indirect": with_indirect,
+                "frame_ms_without_taa": ms,
+                "frame_ms_with_taa": ms_ratio,
+                "frame_ms_with_taa_indirect": ms_ind,
+            })
+        );
+    } else {
+        println!(
+            "{name}, {}x{}, {} VPLs regenerated per frame, {} frames, {threads} threads",
+            args.size.0, args.size.1, args.vpls, args.frames
+        );
+        println!("flicker (mean |frame - previous| / mean, indirect light):");
+        println!("  without temporal filter     {without:.4}   {ms:.0} ms/frame");
+        println!("  TAA on the shadow ratio     {with_ratio:.4}   {ms_ratio:.0} ms/frame");
+        println!("  TAA on the indirect light   {with_indirect:.4}   {ms_ind:.0} ms/frame");
+    }
+    Ok(())
+}

@@ -1,0 +1,75 @@
+//! Frame sequences: every frame regenerates its VPLs (LGH 2019 section 4: "when the lighting
+//! condition changes, we regenerate all VPLs"), rebuilds the hierarchy, and optionally passes
+//! through the temporal filter of [`crate::temporal`], and the flicker metric that measures
+//! how much a static view changes from frame to frame.
+
+use glam::Vec3;
+
+use crate::frame::{Frame, RenderError, RenderSettings, render_frame};
+use crate::progress::Progress;
+use crate::ratio::composite;
+use crate::temporal::{TemporalFilter, TemporalSettings, TemporalTarget};
+use crate::world::World;
+
+/// Renders frames one after another, keeping the temporal history.
+#[derive(Clone, Debug, Default)]
+pub struct Sequence {
+    filter: TemporalFilter,
+    /// The temporal filter, or `None` for independent frames.
+    pub taa: Option<TemporalSettings>,
+}
+
+impl Sequence {
+    /// A sequence with the temporal filter `taa` (or none).
+    #[must_use]
+    pub fn new(taa: Option<TemporalSettings>) -> Self {
+        Self {
+            filter: TemporalFilter::default(),
+            taa,
+        }
+    }
+
+    /// Renders the next frame of `world` with `settings` (whose seed should change per frame
+    /// so that the VPLs and the shadow samples are new) and filters it.
+    ///
+    /// # Errors
+    /// As [`render_frame`].
+    pub fn render(
+        &mut self,
+        world: &World,
+        settings: &RenderSettings,
+        progress: &dyn Progress,
+    ) -> Result<Frame, RenderError> {
+        let mut f = render_frame(world, settings, progress)?;
+        let Some(taa) = self.taa else {
+            return Ok(f);
+        };
+        let indirect = match (taa.target, &f.unshadowed, &f.shadow_ratio) {
+            (TemporalTarget::ShadowRatio, Some(a), Some(ratio)) => {
+                let ratio = self.filter.apply(f.camera, &f.gbuffer, ratio, &taa);
+                composite(&f.gbuffer, a, &ratio)
+            }
+            _ => self
+                .filter
+                .apply(f.camera, &f.gbuffer, &f.indirect.pixels, &taa),
+        };
+        f.set_indirect(indirect, settings.component);
+        Ok(f)
+    }
+}
+
+/// Flicker between two consecutive frames of a static view: the mean absolute difference
+/// of their luminance over the pixels, relative to the mean luminance of the later frame.
+#[must_use]
+pub fn flicker(previous: &[Vec3], current: &[Vec3]) -> f64 {
+    let lum = |c: Vec3| f64::from(lgh_core::color::luminance(c));
+    let n = current.len().max(1) as f64;
+    let diff: f64 = previous
+        .iter()
+        .zip(current)
+        .map(|(&a, &b)| (lum(a) - lum(b)).abs())
+        .sum::<f64>()
+        / n;
+    let mean: f64 = current.iter().map(|&c| lum(c)).sum::<f64>() / n;
+    if mean > 0.0 { diff / mean } else { 0.0 }
+}

@@ -1,0 +1,101 @@
+//! Frame sequences: animation, determinism, temporal filtering.
+
+use lgh_render::sequence::{Sequence, flicker};
+use lgh_render::temporal::{TemporalSettings, TemporalTarget};
+use lgh_render::{Component, Frame, Method, RenderSettings, Silent, World};
+
+fn moving_light_world() -> World {
+    let mut scene = lgh_scene::cornell::cornell_moving_light();
+    scene.finish(std::path::Path::new("<built-in>")).unwrap();
+    World::new(scene)
+}
+
+fn settings(seed: u64) -> RenderSettings {
+    RenderSettings {
+        width: 64,
+        height: 36,
+        vpls: 3000,
+        seed,
+        area_samples: 1,
+        method: Method::Lgh,
+        ..RenderSettings::default()
+    }
+}
+
+/// Renders frames 0..3 at 1 frame per second with the temporal filter.
+fn three_frames() -> Vec<Frame> {
+    let mut world = moving_light_world();
+    let mut seq = Sequence::new(Some(TemporalSettings::default()));
+    (0..3)
+        .map(|f| {
+            world.set_time(f as f32);
+            seq.render(&world, &settings(10 + f), &Silent).unwrap()
+        })
+        .collect()
+}
+
+/// The same seed gives the same three frames (VPLs regenerated, hierarchy rebuilt, temporal
+/// history carried), and the moving light changes the image from frame to frame.
+#[test]
+fn an_animated_sequence_is_deterministic_and_moves() {
+    let (a, b) = (three_frames(), three_frames());
+    for (fa, fb) in a.iter().zip(&b) {
+        assert_eq!(fa.image, fb.image);
+    }
+    // The light goes from x = 0.08 to 0.48, which the camera (looking along +z) sees from
+    // right to left: the image's right half gets darker, the left brighter.
+    let half = |f: &Frame, left: bool| -> f64 {
+        let w = f.image.width as usize;
+        f.direct
+            .pixels
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| (i % w < w / 2) == left)
+            .map(|(_, p)| f64::from(p.x + p.y + p.z))
+            .sum()
+    };
+    assert!(half(&a[2], true) > 1.2 * half(&a[0], true));
+    assert!(half(&a[0], false) > 1.2 * half(&a[2], false));
+}
+
+/// A static view with VPLs regenerated every frame flickers; the temporal filter on the whole
+/// indirect light (alpha 0.1) cuts the frame-to-frame change at least in half, and the
+/// paper's shadow-ratio-only filter does not add flicker. (Measured here over 8 frames:
+/// 0.077 without, 0.063 with the ratio filter, 0.017 with the indirect filter.)
+#[test]
+fn temporal_filtering_reduces_flicker() {
+    let mut world = World::new({
+        let mut s = lgh_scene::cornell::cornell_box();
+        s.finish(std::path::Path::new("<built-in>")).unwrap();
+        s
+    });
+    world.set_time(0.0);
+    let run = |taa: Option<TemporalSettings>| {
+        let mut seq = Sequence::new(taa);
+        let mut prev: Option<Vec<glam::Vec3>> = None;
+        let mut total = 0.0;
+        for f in 0..8u64 {
+            let s = RenderSettings {
+                component: Component::Indirect,
+                area_samples: 0,
+                ..settings(100 + f)
+            };
+            let frame = seq.render(&world, &s, &Silent).unwrap();
+            if let Some(p) = &prev {
+                total += flicker(p, &frame.indirect.pixels);
+            }
+            prev = Some(frame.indirect.pixels);
+        }
+        total / 7.0
+    };
+    let without = run(None);
+    let ratio = run(Some(TemporalSettings::default()));
+    let indirect = run(Some(TemporalSettings {
+        target: TemporalTarget::Indirect,
+        ..TemporalSettings::default()
+    }));
+    eprintln!("flicker without {without}, ratio {ratio}, indirect {indirect}");
+    assert!(without > 0.01, "{without}");
+    assert!(indirect < 0.5 * without, "{indirect} vs {without}");
+    assert!(ratio <= without * 1.05, "{ratio} vs {without}");
+}
