@@ -58,6 +58,38 @@ fn ratio(s: Vec3, u: Vec3) -> f32 {
     }
 }
 
+/// exp(-e) for e >= 0, to about 1e-4 relative (filter weights need no more): 2^(-e log2 e)
+/// split into an integer power set in the exponent bits and a polynomial for the fraction; 0
+/// beyond e = 80.
+#[inline]
+fn exp_neg(e: f32) -> f32 {
+    if !(e < 80.0) {
+        return 0.0;
+    }
+    let t = -e * std::f32::consts::LOG2_E;
+    // round(t) for t <= 0 without a libm call: truncation of a positive number is its floor.
+    let i = -(((0.5 - t) as i32) as f32);
+    let f = t - i; // in (-0.5, 0.5]
+    // 2^f = e^(f ln 2) by its Taylor series to degree 5 (relative error below 1e-6 here).
+    let p = 1.0
+        + f * (0.693_147_2
+            + f * (0.240_226_5 + f * (0.055_504_1 + f * (0.009_618_1 + f * 0.001_333_4))));
+    // Clamp the exponent so that 2^i stays a normal float.
+    let bits = (((i as i32).max(-126) + 127) as u32) << 23;
+    f32::from_bits(bits) * p
+}
+
+/// What one tap reads, packed so that a tap touches one cache line instead of six arrays.
+#[derive(Clone, Copy, Debug, Default)]
+struct Tap {
+    position: Vec3,
+    normal: Vec3,
+    s: Vec3,
+    u: Vec3,
+    guide: f32,
+    hit: bool,
+}
+
 /// Filters S and U with identical edge-stopping weights (see the module docs). Pixels that
 /// see nothing are left as they are and never used as taps.
 #[must_use]
@@ -68,69 +100,83 @@ pub fn filter_ratio_pair(
     params: &AtrousParams,
 ) -> (Vec<Vec3>, Vec<Vec3>) {
     let (w, h) = (g.width as i64, g.height as i64);
-    let mut cur_s = s.to_vec();
-    let mut cur_u = u.to_vec();
+    let mut taps: Vec<Tap> = (0..s.len())
+        .into_par_iter()
+        .map(|p| Tap {
+            position: g.position[p],
+            normal: g.normal[p],
+            s: s[p],
+            u: u[p],
+            guide: ratio(s[p], u[p]),
+            hit: g.is_hit(p),
+        })
+        .collect();
+    let (inv_n, inv_p) = (1.0 / params.n_phi, 1.0 / params.p_phi);
+    // Two buffers, ping-ponged: fresh pages cost as much as the filtering on this VM.
+    let mut next = taps.clone();
     for pass in 0..params.passes {
         let step = 1i64 << pass;
-        let c_phi = params.c_phi / 4f32.powi(pass as i32);
-        let guide: Vec<f32> = cur_s
-            .iter()
-            .zip(&cur_u)
-            .map(|(&a, &b)| ratio(a, b))
-            .collect();
-        let mut out_s = vec![Vec3::ZERO; s.len()];
-        let mut out_u = vec![Vec3::ZERO; s.len()];
-        out_s
-            .par_chunks_mut(w as usize)
-            .zip(out_u.par_chunks_mut(w as usize))
-            .enumerate()
-            .for_each(|(y, (row_s, row_u))| {
-                let y = y as i64;
-                for x in 0..w {
-                    let p = (y * w + x) as usize;
-                    if !g.is_hit(p) {
-                        row_s[x as usize] = cur_s[p];
-                        row_u[x as usize] = cur_u[p];
+        let inv_c = 4f32.powi(pass as i32) / params.c_phi;
+        let src = &taps;
+        next.par_iter_mut().enumerate().for_each(|(p, out)| {
+            let c = src[p];
+            if !c.hit {
+                *out = c;
+                return;
+            }
+            let (y, x) = (p as i64 / w, p as i64 % w);
+            let (mut acc_s, mut acc_u, mut acc_w) = (Vec3::ZERO, Vec3::ZERO, 0.0f32);
+            for (j, hy) in H1.iter().enumerate() {
+                let qy = y + (j as i64 - 2) * step;
+                if qy < 0 || qy >= h {
+                    continue;
+                }
+                for (i, hx) in H1.iter().enumerate() {
+                    let qx = x + (i as i64 - 2) * step;
+                    if qx < 0 || qx >= w {
                         continue;
                     }
-                    let (mut acc_s, mut acc_u, mut acc_w) = (Vec3::ZERO, Vec3::ZERO, 0.0f32);
-                    for (j, hy) in H1.iter().enumerate() {
-                        let qy = y + (j as i64 - 2) * step;
-                        if qy < 0 || qy >= h {
-                            continue;
-                        }
-                        for (i, hx) in H1.iter().enumerate() {
-                            let qx = x + (i as i64 - 2) * step;
-                            if qx < 0 || qx >= w {
-                                continue;
-                            }
-                            let q = (qy * w + qx) as usize;
-                            if !g.is_hit(q) {
-                                continue;
-                            }
-                            let dc = guide[p] - guide[q];
-                            let dn = g.normal[p] - g.normal[q];
-                            let dx = g.position[p] - g.position[q];
-                            // w_c w_n w_x as one exponential (each exponent is <= 0, so
-                            // the clamps to 1 of the separate weights are implied).
-                            let wgt = hx
-                                * hy
-                                * (-(dc * dc) / c_phi
-                                    - dn.length_squared() / params.n_phi
-                                    - dx.length_squared() / params.p_phi)
-                                    .exp();
-                            acc_s += cur_s[q] * wgt;
-                            acc_u += cur_u[q] * wgt;
-                            acc_w += wgt;
-                        }
+                    let q = &src[(qy * w + qx) as usize];
+                    if !q.hit {
+                        continue;
                     }
-                    // The centre tap has weight h(0) > 0, so acc_w > 0.
-                    row_s[x as usize] = acc_s / acc_w;
-                    row_u[x as usize] = acc_u / acc_w;
+                    let dc = c.guide - q.guide;
+                    // w_c w_n w_x as one exponential (each exponent is <= 0, so the
+                    // clamps to 1 of the separate weights are implied).
+                    let e = dc * dc * inv_c
+                        + (c.normal - q.normal).length_squared() * inv_n
+                        + (c.position - q.position).length_squared() * inv_p;
+                    let wgt = hx * hy * exp_neg(e);
+                    acc_s += q.s * wgt;
+                    acc_u += q.u * wgt;
+                    acc_w += wgt;
                 }
-            });
-        cur_s = out_s;
-        cur_u = out_u;
+            }
+            // The centre tap has weight h(0) > 0, so acc_w > 0.
+            let (s, u) = (acc_s / acc_w, acc_u / acc_w);
+            *out = Tap {
+                s,
+                u,
+                guide: ratio(s, u),
+                ..c
+            };
+        });
+        std::mem::swap(&mut taps, &mut next);
     }
-    (cur_s, cur_u)
+    taps.into_iter().map(|t| (t.s, t.u)).unzip()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn exp_neg_is_close_to_exp() {
+        let mut e = 0.0f32;
+        while e < 60.0 {
+            let (a, b) = (super::exp_neg(e), (-e).exp());
+            assert!((a - b).abs() <= 2e-4 * b + 1e-30, "{e}: {a} vs {b}");
+            e += 0.013;
+        }
+        assert_eq!(super::exp_neg(100.0), 0.0);
+        assert_eq!(super::exp_neg(f32::NAN), 0.0);
+    }
 }
