@@ -8,7 +8,7 @@ use clap::{Args, ValueEnum};
 use lgh_core::lighting_grid::LevelCount;
 use lgh_core::vpl::GridEmission;
 use lgh_render::image::check_output_path;
-use lgh_render::lgh::{LghSettings, MAX_SHADOW_SAMPLES};
+use lgh_render::lgh::{JitterAt, LghSettings, MAX_SHADOW_SAMPLES};
 use lgh_render::pt::PtSettings;
 use lgh_render::sequence::Sequence;
 use lgh_render::slc::SlcSettings;
@@ -50,6 +50,15 @@ pub enum FilterArg {
     Atrous,
     /// No filter.
     None,
+}
+
+/// When shadow samples are jittered.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum JitterArg {
+    /// Every candidate, before selection (the demo code).
+    Candidate,
+    /// The selected samples, when their rays are traced.
+    Ray,
 }
 
 /// Directional emission models of grid lights.
@@ -147,6 +156,12 @@ pub struct RenderArgs {
     /// of the paper: grid lights then average only normals that roughly agree).
     #[arg(long)]
     pub normal_bins: bool,
+    /// lgh: when shadow-sample positions are jittered by the grid light's deviation: per
+    /// candidate before selection, weighting it by its contribution there (the authors'
+    /// demo; the default), or only for the k selected samples when their rays are traced
+    /// (measured 1.6x faster lighting, 3-5% darker shadows).
+    #[arg(long, value_enum, default_value = "candidate")]
+    pub jitter_at: JitterArg,
     /// lgh: how a grid light's emission depends on direction.
     #[arg(long, value_enum, default_value = "energy")]
     pub grid_emission: EmissionArg,
@@ -306,6 +321,10 @@ fn lgh_settings(args: &RenderArgs) -> Result<LghSettings> {
         tile: args.tile,
         interleave: args.interleave.unwrap_or(1),
         normal_bins: args.normal_bins,
+        jitter: match args.jitter_at {
+            JitterArg::Candidate => JitterAt::Candidate,
+            JitterArg::Ray => JitterAt::Ray,
+        },
         emission: match args.grid_emission {
             EmissionArg::MeanNormal => GridEmission::MeanNormal,
             EmissionArg::Energy => GridEmission::EnergyConserving,

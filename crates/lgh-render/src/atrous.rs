@@ -63,7 +63,7 @@ fn ratio(s: Vec3, u: Vec3) -> f32 {
 /// beyond e = 80.
 #[inline]
 fn exp_neg(e: f32) -> f32 {
-    if !(e < 80.0) {
+    if e.is_nan() || e >= 80.0 {
         return 0.0;
     }
     let t = -e * std::f32::consts::LOG2_E;
@@ -72,7 +72,7 @@ fn exp_neg(e: f32) -> f32 {
     let f = t - i; // in (-0.5, 0.5]
     // 2^f = e^(f ln 2) by its Taylor series to degree 5 (relative error below 1e-6 here).
     let p = 1.0
-        + f * (0.693_147_2
+        + f * (std::f32::consts::LN_2
             + f * (0.240_226_5 + f * (0.055_504_1 + f * (0.009_618_1 + f * 0.001_333_4))));
     // Clamp the exponent so that 2^i stays a normal float.
     let bits = (((i as i32).max(-126) + 127) as u32) << 23;

