@@ -84,4 +84,12 @@ impl GBuffer {
     pub fn is_hit(&self, i: usize) -> bool {
         self.depth[i].is_finite()
     }
+
+    /// Sum of per-pixel counts divided by the number of pixels that see a surface (at
+    /// least 1): mean overdraw or lights per pixel (pixels that see nothing count 0).
+    #[must_use]
+    pub fn mean_over_hits(&self, counts: &[u32]) -> f64 {
+        let hits = (0..self.len()).filter(|&i| self.is_hit(i)).count().max(1);
+        counts.iter().map(|&c| f64::from(c)).sum::<f64>() / hits as f64
+    }
 }

@@ -41,7 +41,7 @@ use rayon::prelude::*;
 
 use crate::frame::Timings;
 use crate::gbuffer::GBuffer;
-use crate::interleave::{self, BlurParams};
+use crate::interleave::BlurParams;
 use crate::ratio::{
     ShadowReservoirs, ShadowSample, ShadowSettings, halves, offer, shadowed_indirect,
 };
@@ -150,8 +150,7 @@ impl LghOutput {
     /// Mean overdraw over the pixels of `g` that see a surface.
     #[must_use]
     pub fn avg_overdraw(&self, g: &GBuffer) -> f64 {
-        let hits = (0..g.len()).filter(|&i| g.is_hit(i)).count().max(1);
-        self.overdraw.iter().map(|&o| f64::from(o)).sum::<f64>() / hits as f64
+        g.mean_over_hits(&self.overdraw)
     }
 }
 
@@ -391,19 +390,19 @@ pub fn render_lgh(
         lighting_ms + lighting_start.elapsed().as_secs_f64() * 1e3,
     );
 
-    let mut a: Vec<Vec3> = shaded.iter().map(|p| p.0).collect();
-    let blur = (n > 1).then_some(settings.blur);
-    if let Some(p) = &blur {
-        a = t.time("interleave_blur", || interleave::recombine(&a, g, p));
-    }
+    let a: Vec<Vec3> = shaded.iter().map(|p| p.0).collect();
     let shadow = ShadowSettings {
         filter_passes: settings.filter_passes,
-        interleave_blur: blur,
+        interleave_blur: (n > 1).then_some(settings.blur),
         seed,
     };
-    let shadowed = shadowed_indirect(world, g, &a, &reservoirs, &shadow, &mut t);
-    (out.indirect, out.ratio, out.shadow_rays) = (shadowed.indirect, shadowed.ratio, shadowed.rays);
-    out.unshadowed = a;
+    let shadowed = shadowed_indirect(world, g, a, &reservoirs, &shadow, &mut t);
+    (out.indirect, out.unshadowed, out.ratio, out.shadow_rays) = (
+        shadowed.indirect,
+        shadowed.unshadowed,
+        shadowed.ratio,
+        shadowed.rays,
+    );
     out.timings = t;
     Ok(out)
 }

@@ -164,6 +164,8 @@ const STREAM_JITTER: u64 = 0x717;
 pub struct Shadowed {
     /// Indirect radiance albedo / pi x A x ratio.
     pub indirect: Vec<Vec3>,
+    /// The unshadowed sum A, recombined if interleaved.
+    pub unshadowed: Vec<Vec3>,
     /// The filtered shadow ratio D(S) / D(U) per pixel and channel (1 without shadows).
     pub ratio: Vec<Vec3>,
     /// Shadow rays traced.
@@ -178,26 +180,31 @@ pub fn composite(g: &GBuffer, a: &[Vec3], ratio: &[Vec3]) -> Vec<Vec3> {
         .collect()
 }
 
-/// Traces the shadow rays, filters and composites: the indirect radiance
-/// albedo / pi x A x D(S) / D(U), the ratio and the number of rays. `a` is the unshadowed sum
-/// per pixel (already blurred if interleaved). Timings `shadow_rays`, `shadow_filter` and
-/// `composite` go to `t`.
+/// Recombines the unshadowed sum `a` if interleaved (timing `interleave_blur`), traces the
+/// shadow rays, filters and composites: the indirect radiance albedo / pi x A x D(S) / D(U),
+/// A, the ratio and the number of rays. Timings `shadow_rays`, `shadow_filter` and
+/// `composite` go to `t` too.
 #[must_use]
 pub fn shadowed_indirect(
     world: &World,
     g: &GBuffer,
-    a: &[Vec3],
+    a: Vec<Vec3>,
     reservoirs: &ShadowReservoirs,
     settings: &ShadowSettings,
     t: &mut Timings,
 ) -> Shadowed {
     let n_px = g.len();
     let k = reservoirs.k();
+    let a = match &settings.interleave_blur {
+        Some(p) => t.time("interleave_blur", || interleave::recombine(&a, g, p)),
+        None => a,
+    };
     if k == 0 {
         let ratio = vec![Vec3::ONE; n_px];
-        let indirect = t.time("composite", || composite(g, a, &ratio));
+        let indirect = t.time("composite", || composite(g, &a, &ratio));
         return Shadowed {
             indirect,
+            unshadowed: a,
             ratio,
             rays: 0,
         };
@@ -271,9 +278,10 @@ pub fn shadowed_indirect(
             )
         })
         .collect();
-    let indirect = t.time("composite", || composite(g, a, &ratio));
+    let indirect = t.time("composite", || composite(g, &a, &ratio));
     Shadowed {
         indirect,
+        unshadowed: a,
         ratio,
         rays,
     }

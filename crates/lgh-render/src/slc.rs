@@ -32,7 +32,7 @@ use rayon::prelude::*;
 
 use crate::frame::Timings;
 use crate::gbuffer::GBuffer;
-use crate::interleave::{self, BlurParams};
+use crate::interleave::BlurParams;
 use crate::ratio::{ShadowReservoirs, ShadowSample, ShadowSettings, offer, shadowed_indirect};
 use crate::tiles::InterleavedBins;
 use crate::world::World;
@@ -108,12 +108,7 @@ impl SlcOutput {
     /// Mean lights per pixel over the pixels of `g` that see a surface.
     #[must_use]
     pub fn avg_lights_per_pixel(&self, g: &GBuffer) -> f64 {
-        let hits = (0..g.len()).filter(|&i| g.is_hit(i)).count().max(1);
-        self.lights_per_pixel
-            .iter()
-            .map(|&o| f64::from(o))
-            .sum::<f64>()
-            / hits as f64
+        g.mean_over_hits(&self.lights_per_pixel)
     }
 }
 
@@ -247,20 +242,16 @@ pub fn render_slc(
         });
     t.push("shading", start.elapsed().as_secs_f64() * 1e3);
     let lights_per_pixel = shaded.iter().map(|p| p.1).collect();
-    let mut a: Vec<Vec3> = shaded.into_iter().map(|p| p.0).collect();
-    let blur = (n > 1).then_some(settings.blur);
-    if let Some(p) = &blur {
-        a = t.time("interleave_blur", || interleave::recombine(&a, g, p));
-    }
+    let a: Vec<Vec3> = shaded.into_iter().map(|p| p.0).collect();
     let shadow = ShadowSettings {
         filter_passes: settings.filter_passes,
-        interleave_blur: blur,
+        interleave_blur: (n > 1).then_some(settings.blur),
         seed,
     };
-    let shadowed = shadowed_indirect(world, g, &a, &reservoirs, &shadow, &mut t);
+    let shadowed = shadowed_indirect(world, g, a, &reservoirs, &shadow, &mut t);
     SlcOutput {
         indirect: shadowed.indirect,
-        unshadowed: a,
+        unshadowed: shadowed.unshadowed,
         ratio: shadowed.ratio,
         lights_per_pixel,
         shadow_rays: shadowed.rays,
