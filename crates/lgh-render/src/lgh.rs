@@ -16,9 +16,12 @@
 //!    discontinuity-aware blur of [`crate::interleave`] before the shadow filter.
 //! 3. **Shadow sample selection** (3.3, Appendix A): while shading, each pixel keeps k
 //!    single-slot reservoirs; every light of level >= the shadow level (2 by default, 4.1,
-//!    Fig. 3) is offered with weight f_j = luminance of its unshadowed contribution at a
-//!    position jittered by its deviation (q = p_j + 0.5 t * deviation, t raised-cosine per
-//!    axis; design notes 5).
+//!    Fig. 3) is offered with weight f_j = luminance of its unshadowed contribution at its
+//!    shadow target q. By default q is one of the VPLs the light stands for, drawn in
+//!    proportion to its share ([`ShadowTarget::Representative`], an extension that removes
+//!    the darkening of centroids inside objects); the paper's target is the centroid jittered
+//!    by its deviation (q = p_j + 0.5 t * deviation, t raised-cosine per axis; design notes
+//!    5).
 //! 4. **Shadow rays and the ratio estimator** (Heitz et al. 2018): one ray per reservoir;
 //!    U_k = f^ f_j / lum(f_j) (an unbiased estimate of the candidates' sum), S_k = V U_k;
 //!    both are averaged over k, filtered by the same edge-avoiding a-trous filter
@@ -30,6 +33,7 @@ use std::time::Instant;
 use glam::Vec3;
 use lgh_core::blending::{LevelRole, blend};
 use lgh_core::color::luminance;
+use lgh_core::lighting_grid::representative::{NONE, SLOTS, representatives};
 use lgh_core::lighting_grid::{
     Construction, GridBuilder, GridError, InputLights, LevelCount, LightingGrid,
 };
@@ -85,6 +89,23 @@ pub struct LghSettings {
     pub emission: GridEmission,
     /// When the shadow-sample position is jittered (`--jitter-at`).
     pub jitter: JitterAt,
+    /// Where shadow rays go (`--shadow-target`).
+    pub shadow_target: ShadowTarget,
+}
+
+/// Where the shadow ray of a selected grid light goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadowTarget {
+    /// The grid light's centroid jittered by its deviation (the paper and the demo). Centroids
+    /// that fall inside objects (VPLs on a box's top and on the floor around it) or walls
+    /// (VPLs on both sides) report their light as occluded: measured 27 % too dark on the
+    /// Cornell box and 40 % on Sponza against brute force.
+    Centroid,
+    /// One of the VPLs the light stands for, drawn in proportion to its share
+    /// ([`lgh_core::lighting_grid::representative`]; an extension, the default), weighted by
+    /// its own contribution with the VPL's cosine: +1.5 % on the Cornell box, -5 % on Sponza,
+    /// and 15 % faster lighting (one random number per candidate instead of three).
+    Representative,
 }
 
 /// When a shadow sample's position is jittered by the light's deviation.
@@ -119,6 +140,7 @@ impl Default for LghSettings {
             normal_bins: false,
             emission: GridEmission::EnergyConserving,
             jitter: JitterAt::Candidate,
+            shadow_target: ShadowTarget::Representative,
         }
     }
 }
@@ -170,6 +192,10 @@ struct ShadeLights {
     radius: Vec<f32>,
     role: Vec<LevelRole>,
     reach: Vec<f32>,
+    /// [`SLOTS`] representative VPL positions per light (shadow target `Representative`;
+    /// empty otherwise), with their normals; a zero normal marks an empty slot.
+    rep_position: Vec<Vec3>,
+    rep_normal: Vec<Vec3>,
 }
 
 impl ShadeLights {
@@ -215,6 +241,41 @@ impl ShadeLights {
             self.role.extend(std::iter::repeat_n(role, p.len()));
             self.reach
                 .extend(std::iter::repeat_n(role.reach(radius), p.len()));
+        }
+    }
+}
+
+impl ShadeLights {
+    /// Adds the representatives of the lights that [`ShadeLights::add_hierarchy`] added for
+    /// the same `grid` and `lowest` level: [`SLOTS`] per light, drawn for the shadow
+    /// candidates (levels >= `from_level`; a VPL of level 0 is its own), empty slots
+    /// elsewhere.
+    fn add_representatives(
+        &mut self,
+        grid: &LightingGrid,
+        input: &InputLights,
+        lowest: u32,
+        from_level: u32,
+        seed: u64,
+    ) {
+        let reps = representatives(grid, input, from_level, seed);
+        if lowest == 0 {
+            // A VPL stands for itself.
+            for (k, &p) in input.positions.iter().enumerate() {
+                let n = input.normals.map_or(Vec3::ZERO, |n| n[k]);
+                self.rep_position.extend(std::iter::repeat_n(p, SLOTS));
+                self.rep_normal.extend(std::iter::repeat_n(n, SLOTS));
+            }
+        }
+        let first = grid.level_range(1).start;
+        for &r in &reps[SLOTS * first..] {
+            let (p, n) = match (r != NONE, input.normals) {
+                (true, Some(normals)) => (input.positions[r as usize], normals[r as usize]),
+                (true, None) => (input.positions[r as usize], Vec3::ZERO),
+                _ => (Vec3::ZERO, Vec3::ZERO),
+            };
+            self.rep_position.push(p);
+            self.rep_normal.push(n);
         }
     }
 }
@@ -295,6 +356,9 @@ pub fn render_lgh(
         out.grid_lights += grid.len();
         out.levels = out.levels.max(grid.l_max());
         lights.add_hierarchy(grid, group, lowest, settings.alpha, settings.emission, n2);
+        if shadows && settings.shadow_target == ShadowTarget::Representative {
+            lights.add_representatives(grid, &input, lowest, settings.shadow_from_level, seed);
+        }
         lighting_ms += start.elapsed().as_secs_f64() * 1e3;
     }
     t.push("lgh_build", build_ms);
@@ -316,6 +380,7 @@ pub fn render_lgh(
         0
     };
     let eps2 = eps * eps;
+    let representative = settings.shadow_target == ShadowTarget::Representative;
     let w = g.width as usize;
     // Per pixel: A and overdraw; and k reservoirs.
     let mut shaded: Vec<(Vec3, u32)> = vec![(Vec3::ZERO, 0); n_px];
@@ -356,28 +421,43 @@ pub fn render_lgh(
                     *a += b * c;
                     if k > 0 && l as u32 >= settings.shadow_from_level {
                         let dev = lights.deviation[j] * settings.dev_scale;
-                        let sample = match settings.jitter {
-                            JitterAt::Candidate => {
-                                let t = Vec3::new(
-                                    raised_cosine(halves(rng.next_u32())),
-                                    raised_cosine(halves(rng.next_u32())),
-                                    raised_cosine(halves(rng.next_u32())),
-                                );
-                                let q = p + t * dev;
-                                let f = b * light_irradiance(xp, n, q, nj, iso, ij, eps2);
-                                ShadowSample {
-                                    q,
-                                    n: nj,
-                                    f,
-                                    jitter: Vec3::ZERO,
-                                }
+                        let sample = if representative {
+                            let slot = SLOTS * j + (rng.next_u32() as usize % SLOTS);
+                            let nq = lights.rep_normal[slot];
+                            if nq == Vec3::ZERO {
+                                continue;
                             }
-                            JitterAt::Ray => ShadowSample {
-                                q: p,
-                                n: nj,
-                                f: b * c,
-                                jitter: dev,
-                            },
+                            let q = lights.rep_position[slot];
+                            ShadowSample {
+                                q,
+                                n: nq,
+                                f: b * light_irradiance(xp, n, q, nq, 0.0, ij, eps2),
+                                jitter: Vec3::ZERO,
+                            }
+                        } else {
+                            match settings.jitter {
+                                JitterAt::Candidate => {
+                                    let t = Vec3::new(
+                                        raised_cosine(halves(rng.next_u32())),
+                                        raised_cosine(halves(rng.next_u32())),
+                                        raised_cosine(halves(rng.next_u32())),
+                                    );
+                                    let q = p + t * dev;
+                                    let f = b * light_irradiance(xp, n, q, nj, iso, ij, eps2);
+                                    ShadowSample {
+                                        q,
+                                        n: nj,
+                                        f,
+                                        jitter: Vec3::ZERO,
+                                    }
+                                }
+                                JitterAt::Ray => ShadowSample {
+                                    q: p,
+                                    n: nj,
+                                    f: b * c,
+                                    jitter: dev,
+                                },
+                            }
                         };
                         offer(res, sample, luminance(sample.f), &mut rng);
                     }

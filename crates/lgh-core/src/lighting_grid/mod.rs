@@ -23,6 +23,7 @@
 
 pub mod geometry;
 pub mod reference;
+pub mod representative;
 pub mod splat;
 pub mod synthetic;
 
