@@ -165,11 +165,11 @@ pub struct RenderArgs {
     /// of the paper: grid lights then average only normals that roughly agree).
     #[arg(long)]
     pub normal_bins: bool,
-    /// lgh: when shadow-sample positions are jittered by the grid light's deviation: per
-    /// candidate before selection, weighting it by its contribution there (the authors'
-    /// demo; the default), or only for the k selected samples when their rays are traced
-    /// (measured 1.6x faster lighting, 3-5% darker shadows).
-    #[arg(long, value_enum, default_value = "candidate")]
+    /// lgh: when a shadow sample's target (jittered centroid or representative VPL) is drawn:
+    /// per candidate before selection, weighting it by its contribution there (the authors'
+    /// demo), or only for the k selected samples when their rays are traced (the default;
+    /// 13% faster lighting with representatives).
+    #[arg(long, value_enum, default_value = "ray")]
     pub jitter_at: JitterArg,
     /// lgh: where the shadow ray of a selected grid light goes: one of the VPLs it stands for,
     /// drawn in proportion to its share (an extension, the default), or its jittered centroid

@@ -40,6 +40,8 @@ pub struct ShadowSample {
     /// Per-axis jitter extent drawn when the ray is traced: the ray goes to
     /// q + t * jitter, t raised-cosine per axis (zero: to q itself).
     pub jitter: Vec3,
+    /// Index of the light in the method's own list, for a target drawn after selection.
+    pub light: u32,
 }
 
 /// k reservoirs per pixel in one flat buffer (memory fixed at k samples a pixel).

@@ -234,6 +234,7 @@ pub fn render_slc(
                             n: vpls.normals[j],
                             f: c,
                             jitter: Vec3::ZERO,
+                            light: j as u32,
                         };
                         offer(res, sample, luminance(c), &mut rng);
                     }
