@@ -419,6 +419,7 @@ pub fn render_lgh(
     let mut lights = ShadeLights::default();
     let mut build_ms = 0.0;
     let mut lighting_ms = 0.0;
+    let mut reps_ms = 0.0;
     for group in groups.iter().filter(|g| !g.is_empty()) {
         let input = InputLights {
             positions: &group.positions,
@@ -433,12 +434,17 @@ pub fn render_lgh(
         out.grid_lights += grid.len();
         out.levels = out.levels.max(grid.l_max());
         lights.add_hierarchy(grid, group, lowest, settings.alpha, settings.emission, n2);
-        if shadows && settings.shadow_target == ShadowTarget::Representative {
-            lights.add_representatives(grid, &input, lowest, settings.shadow_from_level, seed);
-        }
         lighting_ms += start.elapsed().as_secs_f64() * 1e3;
+        if shadows && settings.shadow_target == ShadowTarget::Representative {
+            let start = Instant::now();
+            lights.add_representatives(grid, &input, lowest, settings.shadow_from_level, seed);
+            reps_ms += start.elapsed().as_secs_f64() * 1e3;
+        }
     }
     t.push("lgh_build", build_ms);
+    if reps_ms > 0.0 {
+        t.push("representatives", reps_ms);
+    }
     let lighting_start = Instant::now();
     out.shaded_lights = lights.position.len();
     let bins = InterleavedBins::build(

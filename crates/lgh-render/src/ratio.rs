@@ -134,16 +134,13 @@ pub fn halves(x: u32) -> Vec2 {
     )
 }
 
-/// Offers `sample` with weight `lum` to every reservoir of a pixel (Appendix A), drawing the
-/// decisions from `rng`.
+/// Offers `sample` with weight `lum` to every reservoir of a pixel (Appendix A), with
+/// replacement thresholds ([`Reservoir::update_jump`]): random numbers from `rng` are drawn
+/// only when a reservoir takes the sample, not for every light.
 #[inline]
 pub fn offer(res: &mut [Reservoir<ShadowSample>], sample: ShadowSample, lum: f32, rng: &mut Rng) {
-    for pair in res.chunks_mut(2) {
-        let u = halves(rng.next_u32());
-        pair[0].update(sample, lum, u.x);
-        if let Some(r) = pair.get_mut(1) {
-            r.update(sample, lum, u.y);
-        }
+    for r in res {
+        r.update_jump(|| sample, lum, || rng.next_f32());
     }
 }
 

@@ -53,6 +53,12 @@ pub fn representatives(
     let keys: Vec<AtomicU64> = (0..grid.len() * SLOTS)
         .map(|_| AtomicU64::new(u64::MAX))
         .collect();
+    // Vertices as integers in (z, y, x) order, for fast lookups.
+    let vkeys: Vec<u64> = grid.vertex.par_iter().map(|&v| vertex_key(v)).collect();
+    let grid = Lookup {
+        grid,
+        vkeys: &vkeys,
+    };
     // S_1 from the input lights.
     lights
         .positions
@@ -61,7 +67,7 @@ pub fn representatives(
         .enumerate()
         .for_each(|(i, (&p, &intensity))| {
             offer(
-                grid,
+                &grid,
                 &keys,
                 1,
                 p,
@@ -71,23 +77,41 @@ pub fn representatives(
                 |_| i as u32,
             );
         });
-    let s1 = grid.level_range(1);
+    let s1 = grid.grid.level_range(1);
     let s1_reps: Vec<u32> = keys[SLOTS * s1.start..SLOTS * s1.end]
         .iter()
         .map(|k| unpack(k.load(Ordering::Relaxed)))
         .collect();
     // Levels >= 2 from S_1.
-    for l in from_level.max(2)..=grid.l_max() {
+    for l in from_level.max(2)..=grid.grid.l_max() {
         s1.clone().into_par_iter().for_each(|u| {
             let k = u - s1.start;
             let reps = &s1_reps[SLOTS * k..SLOTS * (k + 1)];
-            let lum = luminance(grid.intensity[u]);
-            offer(grid, &keys, l, grid.position[u], lum, seed, u as u64, |s| {
-                reps[s]
-            });
+            let lum = luminance(grid.grid.intensity[u]);
+            offer(
+                &grid,
+                &keys,
+                l,
+                grid.grid.position[u],
+                lum,
+                seed,
+                u as u64,
+                |s| reps[s],
+            );
         });
     }
     keys.into_iter().map(|k| unpack(k.into_inner())).collect()
+}
+
+/// A grid with its vertices as sortable integers.
+struct Lookup<'a> {
+    grid: &'a LightingGrid,
+    vkeys: &'a [u64],
+}
+
+/// Vertex v as an integer ordered like (z, y, x) (coordinates are below 2^21).
+fn vertex_key(v: UVec3) -> u64 {
+    (u64::from(v.z) << 42) | (u64::from(v.y) << 21) | u64::from(v.x)
 }
 
 /// The representative packed in a key (its low 32 bits), or [`NONE`].
@@ -99,7 +123,7 @@ fn unpack(key: u64) -> u32 {
 /// vertices around it, with weight w_l(p) lum; slot s carries the input light `rep(s)`.
 #[allow(clippy::too_many_arguments)]
 fn offer(
-    grid: &LightingGrid,
+    lookup: &Lookup,
     keys: &[AtomicU64],
     l: u32,
     p: glam::Vec3,
@@ -111,10 +135,10 @@ fn offer(
     if lum <= 0.0 {
         return;
     }
-    let geom = grid.geometry;
+    let geom = lookup.grid.geometry;
     let (c, f) = locate(p, geom.origin, geom.cell_size(l), geom.cells_per_axis(l));
-    let range = grid.level_range(l);
-    let vertices = &grid.vertex[range.clone()];
+    let range = lookup.grid.level_range(l);
+    let vertices = &lookup.vkeys[range.clone()];
     for corner in 0..8u32 {
         let d = UVec3::new(corner & 1, (corner >> 1) & 1, corner >> 2);
         let w = corner_weight(f, d) * lum;
@@ -122,25 +146,40 @@ fn offer(
             continue;
         }
         let v = c + d;
-        let Ok(k) = vertices.binary_search_by_key(&(v.z, v.y, v.x), |u| (u.z, u.y, u.x)) else {
+        let Ok(k) = vertices.binary_search(&vertex_key(v)) else {
             continue;
         };
         let j = range.start + k;
+        // One hash per (source, vertex): 16 random bits for each of the 4 slots.
+        let bits = hash(&[seed, u64::from(l), id, u64::from(corner)]);
         for (s, slot) in keys[SLOTS * j..SLOTS * (j + 1)].iter().enumerate() {
             let r = rep(s);
             if r == NONE {
                 continue;
             }
-            let bits = hash(&[seed, u64::from(l), id, u64::from(corner), s as u64]);
             // Key E / w with E = -ln(u) exponential, u uniform in (0, 1].
-            let u = ((bits >> 40) as f32 + 1.0) * (1.0 / 16_777_216.0);
-            let key = -u.ln() / w;
-            slot.fetch_min(
-                (u64::from(key.to_bits()) << 32) | u64::from(r),
-                Ordering::Relaxed,
-            );
+            let u = (((bits >> (16 * s)) & 0xffff) as f32 + 1.0) * (1.0 / 65_536.0);
+            let key = (u64::from((-ln(u) / w).to_bits()) << 32) | u64::from(r);
+            // Most offers lose: read before the (costlier) atomic update.
+            if key < slot.load(Ordering::Relaxed) {
+                slot.fetch_min(key, Ordering::Relaxed);
+            }
         }
     }
+}
+
+/// ln(u) for u in (0, 1], to about 3e-4 absolute: the exponent bits plus a polynomial for the
+/// mantissa (keys need no more, and libm's ln dominated the cost of the draw).
+#[inline]
+fn ln(u: f32) -> f32 {
+    let bits = u.to_bits();
+    let e = ((bits >> 23) & 0xff) as f32 - 127.0;
+    // m in [1, 2); log2(m) by a degree-5 fit of (m - 1).
+    let m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000) - 1.0;
+    let log2_m = m
+        * (1.442_686_8
+            + m * (-0.720_871_5 + m * (0.469_209_6 + m * (-0.276_168_1 + m * 0.085_142_8))));
+    (e + log2_m) * std::f32::consts::LN_2
 }
 
 #[cfg(test)]
@@ -227,6 +266,20 @@ mod tests {
             // 0.999 quantiles of chi-square with 1..=5 degrees of freedom (0 when one light).
             let limit = [1e-9, 10.83, 13.82, 16.27, 18.47, 20.52][df - 1];
             assert!(chi2 <= limit, "grid light {j}: chi2 {chi2} (df {})", df - 1);
+        }
+    }
+
+    #[test]
+    fn fast_ln_is_close_to_ln() {
+        let mut u = 1.0f32 / 65_536.0;
+        while u <= 1.0 {
+            assert!(
+                (ln(u) - u.ln()).abs() < 5e-4,
+                "{u}: {} vs {}",
+                ln(u),
+                u.ln()
+            );
+            u += 1.0 / 4096.0;
         }
     }
 
