@@ -129,7 +129,24 @@ pub fn light_irradiance(
 ) -> Vec3 {
     let d = p - x;
     let d2 = d.length_squared();
-    let inv_d = d2.sqrt().recip();
+    light_irradiance_along(d, d2, d2.sqrt().recip(), n_x, m, iso, flux, eps2)
+}
+
+/// [`light_irradiance`] with the offset d = p - x, d^2 and 1 / |d| already at hand (the LGH
+/// lighting loop needs them for the blending weight first).
+#[inline]
+#[must_use]
+#[allow(clippy::too_many_arguments)]
+pub fn light_irradiance_along(
+    d: Vec3,
+    d2: f32,
+    inv_d: f32,
+    n_x: Vec3,
+    m: Vec3,
+    iso: f32,
+    flux: Vec3,
+    eps2: f32,
+) -> Vec3 {
     let cos_x = n_x.dot(d) * inv_d;
     let cos_v = (-m.dot(d) * inv_d).max(0.0) + iso;
     if cos_x <= 0.0 || cos_v <= 0.0 || !inv_d.is_finite() {
