@@ -84,6 +84,8 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
                 format!("shadow_samples_{k}"),
                 serde_json::json!({
                     "lighting_ms": get("lighting"),
+                    "representatives_ms": get("representatives"),
+                    "shadow_targets_ms": get("shadow_targets"),
                     "shadow_rays_ms": get("shadow_rays"),
                     "shadow_filter_ms": get("shadow_filter"),
                     "composite_ms": get("composite"),
@@ -134,17 +136,27 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
         );
     }
     println!(
-        "\nTable 3 (4 shadow samples): {:>9} {:>9} {:>9} {:>11} {:>11} {:>10} {:>9}",
-        "VPLs", "G-buffer", "lighting", "shadow rays", "shadow filt", "composite", "overdraw"
+        "\nTable 3 (4 shadow samples): {:>9} {:>9} {:>9} {:>9} {:>9} {:>11} {:>11} {:>10} {:>9}",
+        "VPLs",
+        "G-buffer",
+        "reps",
+        "lighting",
+        "targets",
+        "shadow rays",
+        "shadow filt",
+        "composite",
+        "overdraw"
     );
     for r in &rows {
         let k = &r["runs"]["shadow_samples_4"];
         let f = |key: &str| k[key].as_f64().unwrap_or(0.0);
         println!(
-            "                            {:>9} {:>9.1} {:>9.1} {:>11.1} {:>11.1} {:>10.1} {:>9.1}",
+            "                            {:>9} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>11.1} {:>11.1} {:>10.1} {:>9.1}",
             r["vpls"],
             gbuffer_ms,
+            f("representatives_ms"),
             f("lighting_ms"),
+            f("shadow_targets_ms"),
             f("shadow_rays_ms"),
             f("shadow_filter_ms"),
             f("composite_ms"),
