@@ -226,11 +226,11 @@ fn filter_row(
         if qy < 0 || qy >= h as i64 {
             continue;
         }
-        let tap: Vec<&[f32]> = (0..PLANES).map(|k| src.row(k, qy as usize)).collect();
+        let tap: [&[f32]; PLANES] = std::array::from_fn(|k| src.row(k, qy as usize));
         for (i, hx) in H1.iter().enumerate() {
             // The tap row shifted by dx = (i - 2) step, within the padding.
             let from = (pad as i64 + (i as i64 - 2) * step as i64) as usize;
-            let q: Vec<&[f32]> = tap.iter().map(|t| &t[from..from + wp]).collect();
+            let q: [&[f32]; PLANES] = tap.map(|t| &t[from..from + wp]);
             let hxy = hx * hy;
             for (bi, b) in (0..wp).step_by(LANES).enumerate() {
                 let c = |k: usize| block(centre[k], b);

@@ -259,26 +259,30 @@ impl ShadeLights {
     fn add_representatives(
         &mut self,
         grid: &LightingGrid,
-        input: &InputLights,
+        vpls: &Vpls,
         lowest: u32,
         from_level: u32,
         seed: u64,
     ) {
-        let reps = representatives(grid, input, from_level, seed);
+        let input = InputLights {
+            positions: &vpls.positions,
+            intensity: &vpls.flux,
+            normals: Some(&vpls.normals),
+        };
+        let reps = representatives(grid, &input, from_level, seed);
         if lowest == 0 {
             // A VPL stands for itself.
-            for (k, &p) in input.positions.iter().enumerate() {
-                let n = input.normals.map_or(Vec3::ZERO, |n| n[k]);
+            for (&p, &n) in vpls.positions.iter().zip(&vpls.normals) {
                 self.rep_position.extend(std::iter::repeat_n(p, SLOTS));
                 self.rep_normal.extend(std::iter::repeat_n(n, SLOTS));
             }
         }
         let first = grid.level_range(1).start;
         for &r in &reps[SLOTS * first..] {
-            let (p, n) = match (r != NONE, input.normals) {
-                (true, Some(normals)) => (input.positions[r as usize], normals[r as usize]),
-                (true, None) => (input.positions[r as usize], Vec3::ZERO),
-                _ => (Vec3::ZERO, Vec3::ZERO),
+            let (p, n) = if r == NONE {
+                (Vec3::ZERO, Vec3::ZERO)
+            } else {
+                (vpls.positions[r as usize], vpls.normals[r as usize])
             };
             self.rep_position.push(p);
             self.rep_normal.push(n);
@@ -473,7 +477,7 @@ pub fn render_lgh(
         lighting_ms += start.elapsed().as_secs_f64() * 1e3;
         if shadows && settings.shadow_target == ShadowTarget::Representative {
             let start = Instant::now();
-            lights.add_representatives(grid, &input, lowest, settings.shadow_from_level, seed);
+            lights.add_representatives(grid, group, lowest, settings.shadow_from_level, seed);
             reps_ms += start.elapsed().as_secs_f64() * 1e3;
         }
     }
