@@ -91,38 +91,44 @@ const HIT: usize = 13;
 /// Pixels processed together in the inner loop: fixed-size blocks vectorise reliably.
 const LANES: usize = 8;
 
-/// The filter's inputs as structure-of-arrays planes: position x, y, z, normal x, y, z,
-/// S r, g, b, U r, g, b, guide, hit (1 or 0). Every row is stored with `pad` zero pixels on
-/// each side and rounded up to whole [`LANES`] blocks, so that a tap shifted by up to `pad`
-/// pixels reads a plain slice (zeros, hit 0, outside the image) and no tap ever reads a NaN.
-struct Planes {
-    data: Vec<f32>,
+/// Layout of the filter's structure-of-arrays planes: every row is stored with `pad` zero
+/// pixels on each side and rounded up to whole [`LANES`] blocks, so that a tap shifted by up
+/// to `pad` pixels reads a plain slice (zeros, hit 0, outside the image) and no tap ever reads
+/// a NaN.
+#[derive(Clone, Copy)]
+struct Layout {
     /// Pixels per stored row: pad + width rounded up to LANES + pad.
     stride: usize,
     pad: usize,
     height: usize,
 }
 
-impl Planes {
-    fn new(width: usize, height: usize, pad: usize) -> Self {
-        let stride = pad + width.div_ceil(LANES) * LANES + pad;
-        Self {
-            data: vec![0.0; PLANES * stride * height],
-            stride,
-            pad,
-            height,
-        }
+impl Layout {
+    /// Floats per plane.
+    fn plane(&self) -> usize {
+        self.stride * self.height
     }
+}
 
-    /// Row `y` of plane `k`, padding included.
+/// The planes a pass reads: position x, y, z, normal x, y, z and hit (1 or 0), which never
+/// change (`fixed`, planes 0..6 and 6), and S r, g, b, U r, g, b and guide, which every pass
+/// rewrites (`dynamic`, ping-ponged between two buffers).
+struct Planes<'a> {
+    layout: Layout,
+    fixed: &'a [f32],
+    dynamic: &'a [f32],
+}
+
+impl Planes<'_> {
+    /// Row `y` of plane `k` (numbered as [`PLANES`] lists them), padding included.
     fn row(&self, k: usize, y: usize) -> &[f32] {
-        let at = (k * self.height + y) * self.stride;
-        &self.data[at..at + self.stride]
-    }
-
-    /// Index of pixel (x, y) of plane `k` in `data`.
-    fn index(&self, k: usize, x: usize, y: usize) -> usize {
-        (k * self.height + y) * self.stride + self.pad + x
+        let (buf, k) = match k {
+            OUT..HIT => (self.dynamic, k - OUT),
+            HIT => (self.fixed, 6),
+            _ => (self.fixed, k),
+        };
+        let at = k * self.layout.plane() + y * self.layout.stride;
+        &buf[at..at + self.layout.stride]
     }
 }
 
@@ -132,7 +138,7 @@ impl Planes {
 /// Layout for speed: structure-of-arrays planes with padded rows; for every output row the
 /// 25 taps are the outer loop and blocks of [`LANES`] pixels the inner one, so that the
 /// inner loop reads contiguous memory and vectorises (measured 4x faster than a loop over
-/// taps per pixel).
+/// taps per pixel). Only the 7 planes a pass rewrites are double-buffered.
 #[must_use]
 pub fn filter_ratio_pair(
     s: &[Vec3],
@@ -142,54 +148,70 @@ pub fn filter_ratio_pair(
 ) -> (Vec<Vec3>, Vec<Vec3>) {
     let (w, h) = (g.width as usize, g.height as usize);
     let passes = params.passes.min(12);
-    let mut planes = Planes::new(w, h, 2 << passes.saturating_sub(1));
-    for p in (0..s.len()).filter(|&p| g.is_hit(p)) {
-        let (x, y) = (p % w, p / w);
-        let vals = [
-            g.position[p].to_array(),
-            g.normal[p].to_array(),
-            s[p].to_array(),
-            u[p].to_array(),
-        ];
-        for (k, v) in vals.iter().flatten().enumerate() {
-            let i = planes.index(k, x, y);
-            planes.data[i] = *v;
+    let pad = 2 << passes.saturating_sub(1);
+    let layout = Layout {
+        stride: pad + w.div_ceil(LANES) * LANES + pad,
+        pad,
+        height: h,
+    };
+    // Plane k, row y: the image's pixels from `pad` on.
+    let fill = |buf: &mut [f32], value: &(dyn Fn(usize) -> f32 + Sync)| {
+        buf.par_chunks_mut(layout.stride)
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, v) in row[pad..pad + w].iter_mut().enumerate() {
+                    let p = y * w + x;
+                    *v = if g.is_hit(p) { value(p) } else { 0.0 };
+                }
+            });
+    };
+    let plane = layout.plane();
+    let mut fixed = vec![0.0f32; 7 * plane];
+    let mut cur = vec![0.0f32; 7 * plane];
+    for (c, buf) in fixed.chunks_mut(plane).enumerate() {
+        match c {
+            0..3 => fill(buf, &|p| g.position[p][c]),
+            3..6 => fill(buf, &|p| g.normal[p][c - 3]),
+            _ => fill(buf, &|_| 1.0),
         }
-        let (ig, ih) = (planes.index(GUIDE, x, y), planes.index(HIT, x, y));
-        planes.data[ig] = ratio(s[p], u[p]);
-        planes.data[ih] = 1.0;
+    }
+    for (c, buf) in cur.chunks_mut(plane).enumerate() {
+        match c {
+            0..3 => fill(buf, &|p| s[p][c]),
+            3..6 => fill(buf, &|p| u[p][c - 3]),
+            _ => fill(buf, &|p| ratio(s[p], u[p])),
+        }
     }
     let (inv_n, inv_p) = (1.0 / params.n_phi, 1.0 / params.p_phi);
-    // Two buffers, ping-ponged: fresh pages cost as much as the filtering on this VM.
-    let mut next = Planes {
-        data: planes.data.clone(),
-        ..planes
-    };
-    let stride = planes.stride;
+    // Non-hit pixels and padding stay zero in both buffers: passes write only hit pixels.
+    let mut next = vec![0.0f32; 7 * plane];
     for pass in 0..passes {
         let step = 1usize << pass;
         let inv_c = 4f32.powi(pass as i32) / params.c_phi;
-        let src = &planes;
+        let src = Planes {
+            layout,
+            fixed: &fixed,
+            dynamic: &cur,
+        };
         // Output rows in parallel; each task writes its row of the 7 output planes.
-        let outs = &mut next.data[OUT * h * stride..(OUT + 7) * h * stride];
         let mut rows: Vec<Vec<&mut [f32]>> = (0..h).map(|_| Vec::with_capacity(7)).collect();
-        for (r, chunk) in outs.chunks_mut(stride).enumerate() {
+        for (r, chunk) in next.chunks_mut(layout.stride).enumerate() {
             rows[r % h].push(chunk);
         }
         rows.into_par_iter().enumerate().for_each(|(y, mut row)| {
-            filter_row(src, &mut row, w, y, step, [inv_c, inv_n, inv_p]);
+            filter_row(&src, &mut row, w, y, step, [inv_c, inv_n, inv_p]);
         });
-        std::mem::swap(&mut planes, &mut next);
+        std::mem::swap(&mut cur, &mut next);
     }
-    let pixel = |k: usize, p: usize| {
-        let (x, y) = (p % w, p / w);
-        let at = |c: usize| planes.data[planes.index(k + c, x, y)];
+    let pixel = |c: usize, p: usize| {
+        let at = |k: usize| cur[(c + k) * plane + (p / w) * layout.stride + pad + p % w];
         Vec3::new(at(0), at(1), at(2))
     };
     (0..s.len())
+        .into_par_iter()
         .map(|p| {
             if g.is_hit(p) {
-                (pixel(OUT, p), pixel(OUT + 3, p))
+                (pixel(0, p), pixel(3, p))
             } else {
                 // Pixels that see nothing keep their input values.
                 (s[p], u[p])
@@ -216,7 +238,7 @@ fn filter_row(
     step: usize,
     [inv_c, inv_n, inv_p]: [f32; 3],
 ) {
-    let (pad, h) = (src.pad, src.height);
+    let (pad, h) = (src.layout.pad, src.layout.height);
     let wp = w.div_ceil(LANES) * LANES;
     // Accumulators: S r, g, b, U r, g, b, weight.
     let mut acc = vec![[0.0f32; LANES]; 7 * (wp / LANES)];
