@@ -52,7 +52,7 @@ pub enum FilterArg {
     None,
 }
 
-/// When shadow samples are jittered.
+/// When shadow targets are drawn.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum JitterArg {
     /// Every candidate, before selection (the demo code).

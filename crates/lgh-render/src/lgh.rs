@@ -249,9 +249,7 @@ impl ShadeLights {
                 .extend(std::iter::repeat_n(role.reach(radius), p.len()));
         }
     }
-}
 
-impl ShadeLights {
     /// Adds the representatives of the lights that [`ShadeLights::add_hierarchy`] added for
     /// the same `grid` and `lowest` level: [`SLOTS`] per light, drawn for the shadow
     /// candidates (levels >= `from_level`; a VPL of level 0 is its own), empty slots
@@ -288,12 +286,19 @@ impl ShadeLights {
             self.rep_normal.push(n);
         }
     }
-}
 
-impl ShadeLights {
+    /// Representative `s` of light `j`: its position and normal, or `None` for an empty slot.
+    fn representative(&self, j: usize, s: usize) -> Option<(Vec3, Vec3)> {
+        let (q, nq) = (
+            self.rep_position[SLOTS * j + s],
+            self.rep_normal[SLOTS * j + s],
+        );
+        (nq != Vec3::ZERO).then_some((q, nq))
+    }
+
     /// Draws the shadow target of every selected sample among its light's representatives in
     /// proportion to their unshadowed contributions at the pixel (as VPLs of the light's
-    /// intensity); the light's centroid if none contributes.
+    /// intensity); drops the sample if none contributes.
     fn resolve_representatives(
         &self,
         reservoirs: &mut ShadowReservoirs,
@@ -545,54 +550,47 @@ pub fn render_lgh(
                     }
                     *a += b * c;
                     if k > 0 && l as u32 >= settings.shadow_from_level {
-                        let dev = lights.deviation[j] * settings.dev_scale;
-                        let sample = if representative && settings.jitter == JitterAt::Ray {
-                            ShadowSample {
+                        let sample = match (settings.jitter, representative) {
+                            // The target is drawn after selection.
+                            (JitterAt::Ray, _) => ShadowSample {
                                 q: p,
                                 n: nj,
                                 f: b * c,
-                                jitter: Vec3::ZERO,
-                                light: j as u32,
-                            }
-                        } else if representative {
-                            let slot = SLOTS * j + (rng.next_u32() as usize % SLOTS);
-                            let nq = lights.rep_normal[slot];
-                            if nq == Vec3::ZERO {
-                                continue;
-                            }
-                            let q = lights.rep_position[slot];
-                            ShadowSample {
-                                q,
-                                n: nq,
-                                f: b * light_irradiance(xp, n, q, nq, 0.0, ij, eps2),
-                                jitter: Vec3::ZERO,
-                                light: j as u32,
-                            }
-                        } else {
-                            match settings.jitter {
-                                JitterAt::Candidate => {
-                                    let t = Vec3::new(
-                                        raised_cosine(halves(rng.next_u32())),
-                                        raised_cosine(halves(rng.next_u32())),
-                                        raised_cosine(halves(rng.next_u32())),
-                                    );
-                                    let q = p + t * dev;
-                                    let f = b * light_irradiance(xp, n, q, nj, iso, ij, eps2);
-                                    ShadowSample {
-                                        q,
-                                        n: nj,
-                                        f,
-                                        jitter: Vec3::ZERO,
-                                        light: j as u32,
-                                    }
-                                }
-                                JitterAt::Ray => ShadowSample {
-                                    q: p,
-                                    n: nj,
-                                    f: b * c,
-                                    jitter: dev,
-                                    light: j as u32,
+                                jitter: if representative {
+                                    Vec3::ZERO
+                                } else {
+                                    lights.deviation[j] * settings.dev_scale
                                 },
+                                light: j as u32,
+                            },
+                            (JitterAt::Candidate, true) => {
+                                let s = rng.next_u32() as usize % SLOTS;
+                                let Some((q, nq)) = lights.representative(j, s) else {
+                                    continue;
+                                };
+                                ShadowSample {
+                                    q,
+                                    n: nq,
+                                    f: b * light_irradiance(xp, n, q, nq, 0.0, ij, eps2),
+                                    jitter: Vec3::ZERO,
+                                    light: j as u32,
+                                }
+                            }
+                            (JitterAt::Candidate, false) => {
+                                let t = Vec3::new(
+                                    raised_cosine(halves(rng.next_u32())),
+                                    raised_cosine(halves(rng.next_u32())),
+                                    raised_cosine(halves(rng.next_u32())),
+                                );
+                                let dev = lights.deviation[j] * settings.dev_scale;
+                                let q = p + t * dev;
+                                ShadowSample {
+                                    q,
+                                    n: nj,
+                                    f: b * light_irradiance(xp, n, q, nj, iso, ij, eps2),
+                                    jitter: Vec3::ZERO,
+                                    light: j as u32,
+                                }
                             }
                         };
                         offer(res, sample, luminance(sample.f), &mut rng);
