@@ -387,7 +387,9 @@ fn run_sequence(
     let mut seq = Sequence::new(taa);
     let mut per_frame = Vec::new();
     for f in first..end {
+        let update = std::time::Instant::now();
         world.set_time(f as f32 / args.fps);
+        let update_ms = update.elapsed().as_secs_f64() * 1e3;
         let mut s = settings.clone();
         s.seed = settings.seed.wrapping_add(u64::from(f));
         s.slc.frame_seed = f;
@@ -395,9 +397,13 @@ fn run_sequence(
         let path = frame_path(&args.out, f);
         frame.image.save(&path, exposure)?;
         let ms = frame.timings.get("total").unwrap_or(0.0);
-        per_frame.push(serde_json::json!({"frame": f, "total_ms": ms}));
+        per_frame
+            .push(serde_json::json!({"frame": f, "total_ms": ms, "scene_update_ms": update_ms}));
         if !args.quiet {
-            eprintln!("frame {f}: {ms:.0} ms -> {}", path.display());
+            eprintln!(
+                "frame {f}: {ms:.0} ms (+ {update_ms:.0} ms moving the scene) -> {}",
+                path.display()
+            );
         }
     }
     if let Some(path) = &args.stats {

@@ -6,10 +6,15 @@ use anyhow::Result;
 use lgh_scene::Scene;
 
 /// Names of the built-in scenes, usable as `builtin:NAME` in place of a file.
-pub const BUILTIN: [&str; 3] = ["cornell", "cornell-moving-light", "emitter-room"];
+pub const BUILTIN: [&str; 4] = [
+    "cornell",
+    "cornell-moving-light",
+    "cornell-moving-block",
+    "emitter-room",
+];
 
-/// Loads `path`, or builds the default Cornell box when there is none; `builtin:cornell` and
-/// `builtin:emitter-room` name the built-in scenes (see [`BUILTIN`]). Warnings from loading go to stderr.
+/// Loads `path`, or builds the default Cornell box when there is none; `builtin:NAME` names a
+/// built-in scene (see [`BUILTIN`]). Warnings from loading go to stderr.
 pub fn load_scene(path: Option<&Path>) -> Result<Scene> {
     let builtin = match path.and_then(Path::to_str) {
         None if path.is_none() => Some("cornell"),
@@ -21,6 +26,7 @@ pub fn load_scene(path: Option<&Path>) -> Result<Scene> {
             let mut s = match name {
                 "cornell" => lgh_scene::cornell::cornell_box(),
                 "cornell-moving-light" => lgh_scene::cornell::cornell_moving_light(),
+                "cornell-moving-block" => lgh_scene::cornell::cornell_moving_block(),
                 "emitter-room" => lgh_scene::emitter_room::emitter_room(32),
                 _ => anyhow::bail!(
                     "builtin:{name}: no such built-in scene (expected one of: {})",

@@ -183,7 +183,7 @@ mod tests {
             material: 0,
             ..Default::default()
         };
-        scene.mesh.append(&prim, glam::Mat4::IDENTITY);
+        scene.mesh.append(&prim, glam::Mat4::IDENTITY, "plane");
         scene.lights.push(lgh_scene::Light::Point {
             position: Vec3::new(0.0, 2.0, 0.0),
             intensity: Vec3::ONE,

@@ -24,8 +24,17 @@ pub struct World {
     pub radius: f32,
     /// Offset of ray origins from surfaces, along the geometric normal (1e-4 x radius).
     pub ray_epsilon: f32,
-    /// The scene's camera and lights at time 0, which the animation moves.
+    /// The scene's camera and lights as loaded, which the animation moves.
     rest: (Option<lgh_scene::Camera>, Vec<lgh_scene::Light>),
+    /// The mesh as loaded, kept only if the animation moves objects.
+    rest_mesh: Option<lgh_scene::Mesh>,
+}
+
+/// The unit face normal of every triangle of `mesh`.
+fn face_normals(mesh: &lgh_scene::Mesh) -> Vec<Vec3> {
+    (0..mesh.len())
+        .map(|t| mesh.face_cross(t).normalize_or_zero())
+        .collect()
 }
 
 /// The surface seen along a ray, with everything shading needs.
@@ -52,14 +61,14 @@ impl World {
     #[must_use]
     pub fn new(scene: Scene) -> Self {
         let accel = Accel::build(&scene.mesh);
-        let face_normals = (0..scene.mesh.len())
-            .map(|t| scene.mesh.face_cross(t).normalize_or_zero())
-            .collect();
+        let face_normals = face_normals(&scene.mesh);
+        let rest_mesh = (!scene.animation.objects.is_empty()).then(|| scene.mesh.clone());
         let (centre, radius) = scene.bounding_sphere();
         let lights = LightSet::new(&scene, radius);
         let rest = (scene.camera.clone(), scene.lights.clone());
         Self {
             rest,
+            rest_mesh,
             scene,
             accel,
             face_normals,
@@ -70,8 +79,10 @@ impl World {
         }
     }
 
-    /// Moves the camera and the lights to time `t` (seconds) of the scene's animation and
-    /// rebuilds the light tables; the geometry (and so the BVH) does not move.
+    /// Moves the camera, the lights and the animated objects to time `t` (seconds) of the
+    /// scene's animation and rebuilds the light tables. If objects move, the BVH is rebuilt
+    /// (in parallel; a full rebuild keeps its quality, where a refit would degrade as objects
+    /// travel). The bounding sphere and the ray offset stay those of the loaded scene.
     pub fn set_time(&mut self, t: f32) {
         if self.scene.animation.is_empty() {
             return;
@@ -79,6 +90,12 @@ impl World {
         let anim = &self.scene.animation;
         self.scene.camera = self.rest.0.as_ref().map(|c| anim.camera_at(c, t));
         self.scene.lights = anim.lights_at(&self.rest.1, t);
+        if let Some(rest) = &self.rest_mesh
+            && anim.pose_mesh(rest, t, &mut self.scene.mesh)
+        {
+            self.accel = Accel::build(&self.scene.mesh);
+            self.face_normals = face_normals(&self.scene.mesh);
+        }
         self.lights = LightSet::new(&self.scene, self.radius);
     }
 

@@ -44,7 +44,7 @@ fn random_mesh(coords: &[f32]) -> Mesh {
         ..Default::default()
     };
     let mut m = Mesh::default();
-    m.append(&prim, Mat4::IDENTITY);
+    m.append(&prim, Mat4::IDENTITY, "mesh");
     m
 }
 
@@ -92,4 +92,66 @@ fn occlusion_respects_t_max() {
     let h = accel.intersect(Vec3::ZERO, Vec3::Z, 5.0).unwrap();
     assert!((h.t - 1.0).abs() < 1e-6);
     assert_eq!(h.triangle, 0);
+}
+
+/// A rigidly moving object: after `World::set_time` the rebuilt BVH agrees with a plain loop
+/// over the posed triangles, the moved block is hit where it now stands, and the rest of the
+/// room is untouched.
+#[test]
+fn moving_objects_rebuild_the_bvh() {
+    let mut scene = lgh_scene::cornell::cornell_moving_block();
+    scene
+        .finish(std::path::Path::new("<built-in cornell-moving-block>"))
+        .unwrap();
+    let block = scene.mesh.object_id("tall_block");
+    let mut world = lgh_render::World::new(scene);
+    let rest = world.scene.mesh.clone();
+    world.set_time(2.0);
+    let posed = &world.scene.mesh;
+    let mut moved = 0;
+    for (v, (p, r)) in posed.positions.iter().zip(&rest.positions).enumerate() {
+        let of_block = posed
+            .triangles
+            .iter()
+            .zip(&posed.objects)
+            .any(|(t, &o)| o == block && t.contains(&(v as u32)));
+        if of_block {
+            moved += usize::from(p.distance(*r) > 1e-3);
+        } else {
+            assert_eq!(
+                p, r,
+                "vertex {v} is not part of the block and must not move"
+            );
+        }
+    }
+    assert!(moved >= 16, "only {moved} block vertices moved");
+    // Rays from a grid of points inside the room towards a grid of directions.
+    let mut disagreements = 0;
+    let mut block_hits = 0;
+    for i in 0..400 {
+        let o = Vec3::new(
+            0.05 + 0.45 * ((i % 7) as f32 / 6.0),
+            0.05 + 0.45 * ((i % 5) as f32 / 4.0),
+            0.02 + 0.05 * ((i % 3) as f32),
+        );
+        let a = i as f32 * 2.399_963;
+        let z = 1.0 - 2.0 * ((i as f32 + 0.5) / 400.0);
+        let s = (1.0 - z * z).sqrt();
+        let d = Vec3::new(s * a.cos(), z, s * a.sin()).normalize();
+        let reference = brute_closest(posed, o, d, 10.0);
+        let hit = world.accel.intersect(o, d, 10.0);
+        match (reference, hit) {
+            (Some((t, tri)), Some(h)) => {
+                assert!((t - h.t).abs() < 1e-4, "t {t} vs {}", h.t);
+                block_hits += usize::from(posed.objects[tri] == block);
+            }
+            (None, None) => {}
+            _ => disagreements += 1,
+        }
+    }
+    assert!(disagreements <= 2, "{disagreements} rays disagree");
+    assert!(
+        block_hits > 10,
+        "only {block_hits} rays hit the moved block"
+    );
 }

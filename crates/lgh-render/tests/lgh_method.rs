@@ -181,7 +181,7 @@ fn without_occluders_the_ratio_is_one_and_lgh_equals_lgh_unshadowed() {
             indices: vec![[0, 1, 2], [0, 2, 3]],
             ..Default::default()
         };
-        s.mesh.append(&prim, glam::Mat4::IDENTITY);
+        s.mesh.append(&prim, glam::Mat4::IDENTITY, "mesh");
     };
     quad(
         &mut scene,

@@ -1,5 +1,6 @@
-//! Motion over time: camera keyframes and moving or turning primary lights, interpolated
-//! linearly between keyframes (constant before the first and after the last).
+//! Motion over time: camera keyframes, moving or turning primary lights and rigidly moving
+//! objects, interpolated linearly between keyframes (constant before the first and after the
+//! last).
 //!
 //! In a scene file:
 //!
@@ -14,13 +15,21 @@
 //! time = 0.0
 //! position = [-0.5, 1.5, 0.0]   # point and spot lights
 //! direction = [0.0, -1.0, 0.0]  # spot and directional lights (optional)
+//!
+//! [[animation.objects]]         # keyframes of a named object of the mesh
+//! object = "tall_block"         # an OBJ `o`/`g` name, a glTF node name (`nodeN` if unnamed)
+//! time = 0.0
+//! translation = [0.1, 0.0, 0.0] # offset from where the file puts it (default 0)
+//! rotation = [0.0, 45.0, 0.0]   # degrees about x, y, z, applied in that order about the
+//!                               # object's bounding-box centre at rest (default 0)
 //! ```
 //!
-//! Rigidly moving objects are not supported yet (the mesh is flattened on load).
+//! Rotation angles are interpolated as angles (so 0 to 360 degrees is one full turn), then
+//! turned into a rotation.
 
-use glam::Vec3;
+use glam::{EulerRot, Mat4, Quat, Vec3};
 
-use crate::{Camera, Light};
+use crate::{Camera, Light, Mesh};
 
 /// One camera keyframe.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -46,6 +55,20 @@ pub struct LightKey {
     pub direction: Option<Vec3>,
 }
 
+/// One keyframe of a rigidly moving object: its pose relative to the rest pose.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObjectKey {
+    /// Index into [`Mesh::object_names`].
+    pub object: u32,
+    /// Time in seconds.
+    pub time: f32,
+    /// Offset from the rest position.
+    pub translation: Vec3,
+    /// Rotation about x, y and z in degrees (applied in that order), about the object's
+    /// bounding-box centre at rest.
+    pub rotation_degrees: Vec3,
+}
+
 /// The motion of a scene.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Animation {
@@ -53,6 +76,8 @@ pub struct Animation {
     pub camera: Vec<CameraKey>,
     /// Light keyframes, sorted by time within each light.
     pub lights: Vec<LightKey>,
+    /// Object keyframes, sorted by time within each object.
+    pub objects: Vec<ObjectKey>,
 }
 
 /// Linear interpolation of keyed values at time `t`: (value before, value after, weight).
@@ -75,7 +100,59 @@ impl Animation {
     /// True if nothing moves.
     #[must_use]
     pub fn is_empty(&self) -> bool {
-        self.camera.is_empty() && self.lights.is_empty()
+        self.camera.is_empty() && self.lights.is_empty() && self.objects.is_empty()
+    }
+
+    /// The rigid transform of `object` at time `t` about the rest-pose centre `pivot`
+    /// (`None` if the object has no keyframe).
+    #[must_use]
+    pub fn object_transform(&self, object: u32, pivot: Vec3, t: f32) -> Option<Mat4> {
+        let keys: Vec<(f32, (Vec3, Vec3))> = self
+            .objects
+            .iter()
+            .filter(|k| k.object == object)
+            .map(|k| (k.time, (k.translation, k.rotation_degrees)))
+            .collect();
+        let (translation, degrees) =
+            interpolate(&keys, t, |a, b, s| (a.0.lerp(b.0, s), a.1.lerp(b.1, s)))?;
+        let r = degrees * (std::f32::consts::PI / 180.0);
+        let rotation = Quat::from_euler(EulerRot::XYZ, r.x, r.y, r.z);
+        Some(
+            Mat4::from_translation(pivot + translation)
+                * Mat4::from_quat(rotation)
+                * Mat4::from_translation(-pivot),
+        )
+    }
+
+    /// Moves the animated objects of `rest` to their pose at time `t`, writing the vertex
+    /// positions and normals of `posed` (a copy of `rest` with the same topology). Vertices of
+    /// objects without keyframes keep their rest values. Returns true if anything moved.
+    pub fn pose_mesh(&self, rest: &Mesh, t: f32, posed: &mut Mesh) -> bool {
+        if self.objects.is_empty() {
+            return false;
+        }
+        let count = rest.object_names.len();
+        let mut lo = vec![Vec3::splat(f32::INFINITY); count];
+        let mut hi = vec![Vec3::splat(f32::NEG_INFINITY); count];
+        let mut vertex_object = vec![u32::MAX; rest.positions.len()];
+        for (tri, &o) in rest.triangles.iter().zip(&rest.objects) {
+            for &v in tri {
+                let p = rest.positions[v as usize];
+                lo[o as usize] = lo[o as usize].min(p);
+                hi[o as usize] = hi[o as usize].max(p);
+                vertex_object[v as usize] = o;
+            }
+        }
+        let transforms: Vec<Option<Mat4>> = (0..count)
+            .map(|o| self.object_transform(o as u32, (lo[o] + hi[o]) * 0.5, t))
+            .collect();
+        for (v, &o) in vertex_object.iter().enumerate() {
+            let m = transforms.get(o as usize).copied().flatten();
+            posed.positions[v] =
+                m.map_or(rest.positions[v], |m| m.transform_point3(rest.positions[v]));
+            posed.normals[v] = m.map_or(rest.normals[v], |m| m.transform_vector3(rest.normals[v]));
+        }
+        true
     }
 
     /// The camera at time `t` (its up vector and field of view from `base`).
@@ -174,6 +251,7 @@ mod tests {
                     direction: None,
                 },
             ],
+            objects: Vec::new(),
         };
         let base = Camera {
             position: Vec3::ONE,
@@ -195,5 +273,79 @@ mod tests {
         assert_eq!(at(0.0), Vec3::Y);
         assert_eq!(at(2.0), Vec3::Y * 2.0);
         assert_eq!(at(9.0), Vec3::Y * 3.0);
+    }
+
+    /// Two unit squares as two objects; the second one spins and slides.
+    fn two_squares() -> Mesh {
+        let mut mesh = Mesh::default();
+        for (i, name) in ["still", "moving"].iter().enumerate() {
+            let x = i as f32 * 2.0;
+            let prim = crate::mesh::Primitive {
+                positions: vec![
+                    Vec3::new(x, 0.0, 0.0),
+                    Vec3::new(x + 1.0, 0.0, 0.0),
+                    Vec3::new(x + 1.0, 0.0, 1.0),
+                    Vec3::new(x, 0.0, 1.0),
+                ],
+                normals: vec![Vec3::Y; 4],
+                uvs: Vec::new(),
+                indices: vec![[0, 2, 1], [0, 3, 2]],
+                material: 0,
+            };
+            mesh.append(&prim, Mat4::IDENTITY, name);
+        }
+        mesh
+    }
+
+    #[test]
+    fn objects_move_rigidly_about_their_rest_centre() {
+        let rest = two_squares();
+        let moving = 1;
+        let anim = Animation {
+            objects: vec![
+                ObjectKey {
+                    object: moving,
+                    time: 0.0,
+                    translation: Vec3::ZERO,
+                    rotation_degrees: Vec3::ZERO,
+                },
+                ObjectKey {
+                    object: moving,
+                    time: 2.0,
+                    translation: Vec3::new(0.0, 2.0, 0.0),
+                    rotation_degrees: Vec3::new(180.0, 0.0, 0.0),
+                },
+            ],
+            ..Animation::default()
+        };
+        let mut posed = rest.clone();
+        assert!(anim.pose_mesh(&rest, 1.0, &mut posed));
+        // the still square is untouched
+        assert_eq!(posed.positions[..4], rest.positions[..4]);
+        // half way: up by 1, turned by 90 degrees about x through the centre (2.5, 0, 0.5)
+        let centre = Vec3::new(2.5, 1.0, 0.5);
+        for v in 4..8 {
+            let p = posed.positions[v];
+            let r = rest.positions[v];
+            assert!((p.x - r.x).abs() < 1e-5, "x kept: {p} vs {r}");
+            assert!((p.z - centre.z).abs() < 1e-5, "turned into the y axis: {p}");
+            assert!(
+                ((p.y - centre.y).abs() - 0.5).abs() < 1e-5,
+                "half an edge from the centre: {p}"
+            );
+            assert!(
+                posed.normals[v].abs_diff_eq(Vec3::Z, 1e-5),
+                "{}",
+                posed.normals[v]
+            );
+        }
+        // distances between vertices are kept (rigid)
+        let d = |m: &Mesh, a: usize, b: usize| m.positions[a].distance(m.positions[b]);
+        for (a, b) in [(4, 5), (4, 6), (5, 7)] {
+            assert!((d(&posed, a, b) - d(&rest, a, b)).abs() < 1e-5);
+        }
+        // no keyframe for the still object, and nothing to do without object keys
+        assert!(anim.object_transform(0, Vec3::ZERO, 1.0).is_none());
+        assert!(!Animation::default().pose_mesh(&rest, 1.0, &mut posed));
     }
 }

@@ -11,7 +11,7 @@
 
 use glam::{Mat4, Vec2, Vec3};
 
-use crate::animation::{Animation, LightKey};
+use crate::animation::{Animation, LightKey, ObjectKey};
 use crate::mesh::Primitive;
 use crate::{Camera, Light, Material, Scene};
 
@@ -214,18 +214,17 @@ pub fn cornell_box() -> Scene {
         let mut v: Vec<Vec3> = q.iter().map(|p| Vec3::from_array(*p) * 1e-3).collect();
         let centre = v.iter().copied().sum::<Vec3>() / 4.0;
         let n = (v[1] - v[0]).cross(v[2] - v[0]);
-        let inside = if qi < FIRST_BLOCK_QUAD {
-            room_centre
+        let (inside, object) = if qi < FIRST_BLOCK_QUAD {
+            (room_centre, "room")
         } else {
             // the block this quad belongs to is the nearer block centre
-            let a = block_centres[0];
-            let b = block_centres[1];
-            let own = if centre.distance(a) < centre.distance(b) {
-                a
+            let [a, b] = block_centres;
+            let (own, object) = if centre.distance(a) < centre.distance(b) {
+                (a, "short_block")
             } else {
-                b
+                (b, "tall_block")
             };
-            2.0 * centre - own // a point outside the block, in front of the face
+            (2.0 * centre - own, object) // a point outside the block, in front of the face
         };
         if n.dot(inside - centre) < 0.0 {
             v.reverse();
@@ -237,7 +236,7 @@ pub fn cornell_box() -> Scene {
             indices: vec![[0, 1, 2], [0, 2, 3]],
             material: *material,
         };
-        scene.mesh.append(&prim, Mat4::IDENTITY);
+        scene.mesh.append(&prim, Mat4::IDENTITY, object);
     }
     scene.camera = Some(Camera {
         position: Vec3::new(0.278, 0.273, -0.8),
@@ -279,6 +278,28 @@ pub fn cornell_moving_light() -> Scene {
                 direction: None,
             },
         ],
+        objects: Vec::new(),
+    };
+    scene
+}
+
+/// The Cornell box, lit by its ceiling light, with the tall block turning by 90 degrees about
+/// the vertical and sliding 10 cm towards the red wall in 2 seconds: the default scene with a
+/// rigidly moving object.
+#[must_use]
+pub fn cornell_moving_block() -> Scene {
+    let mut scene = cornell_box();
+    scene.name = "cornell-moving-block".into();
+    let object = scene.mesh.object_id("tall_block");
+    let key = |time, x, degrees| ObjectKey {
+        object,
+        time,
+        translation: Vec3::new(x, 0.0, 0.0),
+        rotation_degrees: Vec3::new(0.0, degrees, 0.0),
+    };
+    scene.animation = Animation {
+        objects: vec![key(0.0, 0.0, 0.0), key(2.0, 0.1, 90.0)],
+        ..Animation::default()
     };
     scene
 }

@@ -28,7 +28,7 @@ fn quad(scene: &mut Scene, mut v: [Vec3; 4], towards: Vec3, material: u32) {
         indices: vec![[0, 1, 2], [0, 2, 3]],
         material,
     };
-    scene.mesh.append(&prim, Mat4::IDENTITY);
+    scene.mesh.append(&prim, Mat4::IDENTITY, "room");
 }
 
 /// An axis-aligned box [lo, hi] with outward faces.

@@ -72,6 +72,9 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     while let Some((node, parent)) = stack.pop() {
         let m = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if let Some(mesh) = node.mesh() {
+            let object = node
+                .name()
+                .map_or_else(|| format!("node{}", node.index()), str::to_string);
             for p in mesh.primitives() {
                 if p.mode() != gltf::mesh::Mode::Triangles {
                     skipped_modes += 1;
@@ -102,7 +105,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
                     indices: flat.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
                     material,
                 };
-                scene.mesh.append(&prim, m);
+                scene.mesh.append(&prim, m, &object);
             }
         }
         if scene.camera.is_none()

@@ -19,6 +19,11 @@ pub struct Mesh {
     pub triangles: Vec<[u32; 3]>,
     /// Material index of each triangle.
     pub materials: Vec<u32>,
+    /// Object index of each triangle, into [`Mesh::object_names`]. An object is a named group
+    /// of triangles (an OBJ `o`/`g` group, a glTF node) that an animation can move rigidly.
+    pub objects: Vec<u32>,
+    /// Names of the objects, indexed by [`Mesh::objects`].
+    pub object_names: Vec<String>,
 }
 
 /// Vertex data of one primitive, before it is placed in the world.
@@ -49,9 +54,23 @@ impl Mesh {
         self.triangles.is_empty()
     }
 
-    /// Appends a primitive transformed by `to_world`; normals use the inverse transpose.
-    /// Indices that point past the vertex arrays are dropped (the loaders validate first).
-    pub fn append(&mut self, prim: &Primitive, to_world: Mat4) {
+    /// The index of the object named `name`, added if new.
+    pub fn object_id(&mut self, name: &str) -> u32 {
+        match self.object_names.iter().position(|n| n == name) {
+            Some(i) => i as u32,
+            None => {
+                self.object_names.push(name.to_string());
+                self.object_names.len() as u32 - 1
+            }
+        }
+    }
+
+    /// Appends a primitive transformed by `to_world` as part of the object named `object`
+    /// (primitives with the same object name move together); normals use the inverse
+    /// transpose. Indices that point past the vertex arrays are dropped (the loaders validate
+    /// first).
+    pub fn append(&mut self, prim: &Primitive, to_world: Mat4, object: &str) {
+        let object = self.object_id(object);
         let base = self.positions.len() as u32;
         let normal_m = to_world.inverse().transpose();
         let n = prim.positions.len();
@@ -69,6 +88,7 @@ impl Mesh {
             if t.iter().all(|&i| (i as usize) < n) {
                 self.triangles.push([t[0] + base, t[1] + base, t[2] + base]);
                 self.materials.push(prim.material);
+                self.objects.push(object);
             }
         }
     }
@@ -120,5 +140,7 @@ impl Mesh {
         self.triangles.retain(|_| *k.next().unwrap_or(&false));
         let mut k = keep_flags.iter();
         self.materials.retain(|_| *k.next().unwrap_or(&false));
+        let mut k = keep_flags.iter();
+        self.objects.retain(|_| *k.next().unwrap_or(&false));
     }
 }

@@ -85,7 +85,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
                 .collect(),
             material,
         };
-        scene.mesh.append(&prim, Mat4::IDENTITY);
+        scene.mesh.append(&prim, Mat4::IDENTITY, &model.name);
     }
     if uses_default {
         scene.materials.push(Material::default());

@@ -31,15 +31,15 @@
 //! ```
 //!
 //! The file's lights are added to the mesh's own (emissive materials, glTF punctual lights).
-//! An optional `[animation]` table moves the camera and the file's lights over time (see
-//! [`crate::animation`]).
+//! An optional `[animation]` table moves the camera, the file's lights and named objects of
+//! the mesh over time (see [`crate::animation`]).
 
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use serde::Deserialize;
 
-use crate::animation::{Animation, CameraKey, LightKey};
+use crate::animation::{Animation, CameraKey, LightKey, ObjectKey};
 use crate::{Camera, Light, Scene, SceneError};
 
 /// Name of the environment variable that points to the shared test scenes.
@@ -64,6 +64,19 @@ struct AnimationDesc {
     camera: Vec<CameraKeyDesc>,
     #[serde(default)]
     lights: Vec<LightKeyDesc>,
+    #[serde(default)]
+    objects: Vec<ObjectKeyDesc>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectKeyDesc {
+    object: String,
+    time: f32,
+    #[serde(default)]
+    translation: [f32; 3],
+    #[serde(default)]
+    rotation: [f32; 3],
 }
 
 #[derive(Debug, Deserialize)]
@@ -147,12 +160,14 @@ impl LightDesc {
 }
 
 /// The `[animation]` table: keyframes sorted by time, light numbers checked against the
-/// file's `[[lights]]` (offset by the mesh's own lights, which come first).
+/// file's `[[lights]]` (offset by the mesh's own lights, which come first), object names
+/// against the mesh's.
 fn animation(
     path: &Path,
     a: AnimationDesc,
     first_light: usize,
     file_lights: usize,
+    object_names: &[String],
 ) -> Result<Animation, SceneError> {
     let finite = |v: &[f32]| v.iter().all(|x| x.is_finite());
     let mut out = Animation::default();
@@ -195,8 +210,37 @@ fn animation(
             direction: k.direction.map(|d| Vec3::from(d).normalize_or_zero()),
         });
     }
+    for k in a.objects {
+        let Some(object) = object_names.iter().position(|n| *n == k.object) else {
+            let mut known: Vec<&str> = object_names.iter().take(20).map(String::as_str).collect();
+            if object_names.len() > known.len() {
+                known.push("...");
+            }
+            return Err(SceneError::new(
+                path,
+                format!(
+                    "animation.objects: the mesh has no object named \"{}\" (it has: {})",
+                    k.object,
+                    known.join(", ")
+                ),
+            ));
+        };
+        if !finite(&[k.time]) || !finite(&k.translation) || !finite(&k.rotation) {
+            return Err(SceneError::new(
+                path,
+                "animation.objects: a keyframe has a non-finite number",
+            ));
+        }
+        out.objects.push(ObjectKey {
+            object: object as u32,
+            time: k.time,
+            translation: k.translation.into(),
+            rotation_degrees: k.rotation.into(),
+        });
+    }
     out.camera.sort_by(|a, b| a.time.total_cmp(&b.time));
     out.lights.sort_by(|a, b| a.time.total_cmp(&b.time));
+    out.objects.sort_by(|a, b| a.time.total_cmp(&b.time));
     Ok(out)
 }
 
@@ -263,7 +307,13 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         .lights
         .extend(desc.lights.iter().map(LightDesc::to_light));
     if let Some(a) = desc.animation {
-        scene.animation = animation(path, a, first_file_light, desc.lights.len())?;
+        scene.animation = animation(
+            path,
+            a,
+            first_file_light,
+            desc.lights.len(),
+            &scene.mesh.object_names,
+        )?;
     }
     scene.finish(path)?;
     Ok(scene)
@@ -280,7 +330,7 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(
             dir.join("quad.obj"),
-            "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 3 2\nf 1 4 3\n",
+            "o quad\nv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 3 2\nf 1 4 3\n",
         )
         .unwrap();
         let text = format!(
@@ -321,6 +371,36 @@ mod tests {
         let err = load(&path).unwrap_err().to_string();
         assert!(
             err.contains("scene.toml") && err.contains("light 3 does not exist"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn object_keyframes_name_an_object_of_the_mesh() {
+        let path = write_scene(
+            "objects",
+            "[[animation.objects]]\nobject = \"quad\"\ntime = 2.0\ntranslation = [0.0, 1.0, 0.0]\n\
+             [[animation.objects]]\nobject = \"quad\"\ntime = 0.0\nrotation = [0.0, 90.0, 0.0]\n",
+        );
+        let scene = load(&path).unwrap();
+        let keys = &scene.animation.objects;
+        assert_eq!(keys.len(), 2);
+        assert_eq!(keys[0].time, 0.0);
+        assert_eq!(keys[0].rotation_degrees, Vec3::new(0.0, 90.0, 0.0));
+        assert_eq!(keys[1].translation, Vec3::Y);
+        let mut posed = scene.mesh.clone();
+        assert!(scene.animation.pose_mesh(&scene.mesh, 2.0, &mut posed));
+        assert!((posed.positions[0] - scene.mesh.positions[0] - Vec3::Y).length() < 1e-6);
+
+        let path = write_scene(
+            "no-object",
+            "[[animation.objects]]\nobject = \"teapot\"\ntime = 0.0\n",
+        );
+        let err = load(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("scene.toml")
+                && err.contains("no object named \"teapot\"")
+                && err.contains("quad"),
             "{err}"
         );
     }

@@ -14,7 +14,7 @@ pub fn quad(scene: &mut Scene, corners: [Vec3; 4], material: u32) {
         material,
         ..Default::default()
     };
-    scene.mesh.append(&prim, Mat4::IDENTITY);
+    scene.mesh.append(&prim, Mat4::IDENTITY, "mesh");
 }
 
 /// A square floor of half-size `s` at y = 0 facing up, albedo `albedo`, seen from above.
