@@ -110,7 +110,11 @@ pub fn run(args: &BuildArgs) -> Result<()> {
             intensity: &input.intensity,
             normals: Some(&input.normals),
         };
-        for construction in [Construction::GatherFromS1, Construction::ScatterAll] {
+        for construction in [
+            Construction::GatherFromS1,
+            Construction::ScatterAll,
+            Construction::Restrict,
+        ] {
             let mut steps: BTreeMap<String, Vec<f64>> = BTreeMap::new();
             let mut order: Vec<String> = Vec::new();
             let mut totals = Vec::new();

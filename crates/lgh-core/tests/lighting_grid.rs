@@ -9,7 +9,11 @@ use lgh_core::lighting_grid::{
 use lgh_core::rng::Rng;
 use proptest::prelude::*;
 
-const BOTH: [Construction; 2] = [Construction::GatherFromS1, Construction::ScatterAll];
+const ALL: [Construction; 3] = [
+    Construction::GatherFromS1,
+    Construction::ScatterAll,
+    Construction::Restrict,
+];
 
 struct Lights {
     p: Vec<Vec3>,
@@ -105,7 +109,7 @@ fn check_invariants(l: &Lights, g: &LightingGrid) {
 #[test]
 fn invariants_hold_for_both_constructions_and_many_level_counts() {
     let l = synthetic(20_000, 3);
-    for c in BOTH {
+    for c in ALL {
         for levels in [
             LevelCount::Auto,
             LevelCount::Fixed(1),
@@ -117,7 +121,7 @@ fn invariants_hold_for_both_constructions_and_many_level_counts() {
     }
     // Far from the origin: local accumulation keeps the centroid and deviations accurate.
     let far = random_box(5000, 4, Vec3::new(3.0, 1.0, 2.0), Vec3::splat(1.0e4));
-    for c in BOTH {
+    for c in ALL {
         check_invariants(&far, &build(&far, LevelCount::Auto, c));
     }
 }
@@ -182,6 +186,22 @@ fn gather_and_scatter_agree_on_s1_and_are_close_above() {
     }
 }
 
+/// The restriction (each level from the one below through the (1/2, 1, 1/2)^3 stencil) is
+/// exact: it gives the all-scatter hierarchy, to rounding, on every level (same vertices,
+/// same grid lights within the tolerances of `assert_same`).
+#[test]
+fn restriction_equals_all_scatter() {
+    for (l, levels) in [
+        (synthetic(50_000, 7), LevelCount::Auto),
+        (random_box(3000, 8, Vec3::new(3.0, 1.0, 2.0), Vec3::new(-5.0, 1.0, 0.0)), LevelCount::Fixed(5)),
+    ] {
+        let r = build(&l, levels, Construction::Restrict);
+        let s = build(&l, levels, Construction::ScatterAll);
+        assert!(r.l_max() >= 5);
+        assert_same(&r, &s);
+    }
+}
+
 fn assert_same(a: &LightingGrid, b: &LightingGrid) {
     assert_eq!(a.geometry, b.geometry);
     assert_eq!(a.level_start, b.level_start);
@@ -208,7 +228,7 @@ fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
     /// The parallel builder equals the plain one-thread reference on random inputs, with 1 and
-    /// 2 threads, for both constructions; and 1 and 2 threads give bit-identical results.
+    /// 2 threads, for all three constructions; and 1 and 2 threads give bit-identical results.
     #[test]
     fn parallel_builder_matches_reference(
         n in 1usize..300,
@@ -219,7 +239,7 @@ proptest! {
         let scale = if flat { Vec3::new(4.0, 0.0, 2.0) } else { Vec3::new(4.0, 1.0, 2.0) };
         let l = random_box(n, seed, scale, Vec3::new(-1.0, 2.0, 0.5));
         let lc = if levels == 0 { LevelCount::Auto } else { LevelCount::Fixed(levels) };
-        for c in BOTH {
+        for c in ALL {
             let one = in_pool(1, || build(&l, lc, c));
             let two = in_pool(2, || build(&l, lc, c));
             prop_assert_eq!(&one, &two);
@@ -258,7 +278,7 @@ fn edge_cases() {
     }
     // Lights on a plane (one flat axis).
     let plane = random_box(2000, 8, Vec3::new(5.0, 0.0, 3.0), Vec3::ZERO);
-    for c in BOTH {
+    for c in ALL {
         check_invariants(&plane, &build(&plane, LevelCount::Auto, c));
     }
     // Zero-intensity lights keep their share of nothing: sums still hold.
@@ -266,7 +286,7 @@ fn edge_cases() {
     for k in (0..500).step_by(3) {
         zero.i[k] = Vec3::ZERO;
     }
-    for c in BOTH {
+    for c in ALL {
         check_invariants(&zero, &build(&zero, LevelCount::Auto, c));
     }
     let all_zero = Lights {
@@ -335,7 +355,7 @@ fn reused_builder_matches_fresh_builds() {
 #[test]
 fn large_inputs_match_the_reference() {
     let l = synthetic(150_000, 13);
-    for c in BOTH {
+    for c in ALL {
         let g = build(&l, LevelCount::Auto, c);
         let reference = build_reference(&l.input(), g.geometry, c).unwrap();
         assert_same(&g, &reference);

@@ -46,6 +46,42 @@ fn splat_reference(src: &Sources, geom: &GridGeometry, level: u32) -> Level {
     )
 }
 
+/// Level `level` by the restriction stencil from the grid lights of level `level - 1`
+/// (uncompacted), written from its definition: fine vertex v adds to coarse vertex V with
+/// weight prod over axes of (1 if v_a = 2 V_a, 1/2 if |v_a - 2 V_a| = 1).
+fn restrict_reference(finer: &Level, normals: bool, geom: &GridGeometry, level: u32) -> Level {
+    let src = finer.as_sources(normals);
+    let h = geom.cell_size(level);
+    let inv_h2 = 1.0 / (h * h);
+    let mut sums: BTreeMap<(u32, u32, u32), Accum> = BTreeMap::new();
+    for (s, &v) in finer.vertex.iter().enumerate() {
+        let axis = |a: u32| -> Vec<(u32, f32)> {
+            if a % 2 == 0 {
+                vec![(a / 2, 1.0)]
+            } else {
+                vec![(a / 2, 0.5), (a / 2 + 1, 0.5)]
+            }
+        };
+        for &(z, wz) in &axis(v.z) {
+            for &(y, wy) in &axis(v.y) {
+                for &(x, wx) in &axis(v.x) {
+                    let local = (src.positions[s] - geom.origin) / h
+                        - glam::Vec3::new(x as f32, y as f32, z as f32);
+                    sums.entry((z, y, x))
+                        .or_default()
+                        .add_source(&src, s, wx * wy * wz, local, inv_h2);
+                }
+            }
+        }
+    }
+    level_from_sums(
+        sums.into_iter()
+            .map(|((z, y, x), a)| (UVec3::new(x, y, z), a)),
+        geom,
+        level,
+    )
+}
+
 /// Builds the hierarchy with the same geometry as `grid_geometry` (take it from a parallel
 /// build, or make one), single-threaded.
 ///
@@ -69,6 +105,12 @@ pub fn build_reference(
                 l,
             ),
             Construction::ScatterAll => splat_reference(&src, &geometry, l),
+            Construction::Restrict => restrict_reference(
+                &levels[l as usize - 2],
+                lights.normals.is_some(),
+                &geometry,
+                l,
+            ),
         };
         levels.push(level);
     }

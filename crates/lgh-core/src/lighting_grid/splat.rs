@@ -44,6 +44,11 @@ pub struct Sources<'a> {
     /// True if the sources are already in vertex order of a finer grid (the lights of S_1):
     /// the locality sort is skipped.
     pub ordered: bool,
+    /// For the restriction from the next finer level: the sources' integer vertex
+    /// coordinates there. The trilinear weights then come from the vertex (fractions 0, 1/2
+    /// or 1, exactly), while the moments use the source's position; see
+    /// [`Level::as_restriction_sources`].
+    pub finer_vertices: Option<&'a [UVec3]>,
 }
 
 /// The grid lights of one level in vertex order (z, then y, then x), before compaction.
@@ -101,6 +106,23 @@ impl Level {
             mass: Some(&self.mass),
             variance: Some(&self.variance),
             ordered: true,
+            finer_vertices: None,
+        }
+    }
+
+    /// This level's grid lights as the sources of the next coarser level by exact
+    /// restriction. A hat function of spacing 2h is a sum of hats of spacing h with weights
+    /// (1/2, 1, 1/2) at the fine vertices, so a coarse vertex's sums (W, P, Q, intensity,
+    /// normal) are the fine vertices' sums weighted by the trilinear weights *of the fine
+    /// vertices* (the 3x3x3 stencil (1/2, 1, 1/2)^3). The result equals splatting the input
+    /// lights at the coarse level (the all-scatter hierarchy) up to rounding, at the cost of
+    /// splatting |S_(l-1)| sources instead of |S_0|. Must be taken before compaction: a
+    /// zero-intensity vertex still carries mass.
+    #[must_use]
+    pub fn as_restriction_sources(&self, normals: bool) -> Sources<'_> {
+        Sources {
+            finer_vertices: Some(&self.vertex),
+            ..self.as_sources(normals)
         }
     }
 
@@ -145,8 +167,8 @@ pub(crate) struct Accum {
 }
 
 impl Accum {
-    /// Adds prepared source `ps` with trilinear weight `w`, at local offset `local` (cell
-    /// units) from the vertex.
+    /// Adds prepared source `ps` with trilinear weight `w`, whose moment position is at
+    /// local offset `local` (cell units) from the vertex.
     #[inline(always)]
     fn add(&mut self, ps: &PSource, w: f32, local: Vec3) {
         let wm = f64::from(w * ps.mass);
@@ -196,6 +218,14 @@ pub(crate) fn locate(p: Vec3, origin: Vec3, h: f32, r: u32) -> (UVec3, Vec3) {
     ((c.as_uvec3()), (u - c).clamp(Vec3::ZERO, Vec3::ONE))
 }
 
+/// Cell and in-cell fraction (0, 1/2 or 1 per axis, exactly) of vertex `v` of the next finer
+/// grid (2r cells per axis) in a grid of `r` cells per axis.
+#[inline]
+fn locate_finer_vertex(v: UVec3, r: u32) -> (UVec3, Vec3) {
+    let c = (v / 2).min(UVec3::splat(r - 1));
+    (c, (v - 2 * c).as_vec3() * 0.5)
+}
+
 /// The 8 trilinear weights: for corner (dx, dy, dz), w = prod over axes of (d ? f : 1 - f).
 #[inline]
 pub(crate) fn corner_weight(f: Vec3, d: UVec3) -> f32 {
@@ -214,7 +244,11 @@ const SORT_CHUNK: usize = 1 << 16;
 /// that the hot loop reads memory sequentially (variance in cell units).
 #[derive(Clone, Copy, Debug, Default)]
 struct PSource {
+    /// In-cell fraction that gives the trilinear weights.
     f: Vec3,
+    /// In-cell position of the moments (P, Q): `f`, except for a restriction, where `f` is
+    /// the fine vertex's fraction and `g` that of the fine grid light's mean position.
+    g: Vec3,
     cell: UVec3,
     intensity: Vec3,
     normal: Vec3,
@@ -242,10 +276,17 @@ impl Workspace {
         let h = geom.cell_size(level);
         let r = geom.cells_per_axis(level);
         self.r = r;
-        src.positions
-            .par_iter()
-            .map(|&p| locate(p, geom.origin, h, r))
-            .collect_into_vec(&mut self.located);
+        match src.finer_vertices {
+            None => src
+                .positions
+                .par_iter()
+                .map(|&p| locate(p, geom.origin, h, r))
+                .collect_into_vec(&mut self.located),
+            Some(v) => v
+                .par_iter()
+                .map(|&v| locate_finer_vertex(v, r))
+                .collect_into_vec(&mut self.located),
+        }
         // Stable counting sort by cell z, in parallel: every chunk of sources buckets itself
         // (keeping input order), then every z bucket concatenates the chunks' pieces in chunk
         // order. The packed key (y, x, index) lets a later sort order a bucket by row, column
@@ -306,13 +347,20 @@ impl Workspace {
         }
         let inv_h2 = 1.0 / (h * h).max(f32::MIN_POSITIVE);
         let located = &self.located;
+        let restriction = src.finer_vertices.is_some();
         self.order
             .par_iter()
             .map(|&k| {
                 let i = (k & ((1 << 44) - 1)) as usize;
                 let (cell, f) = located[i];
+                let g = if restriction {
+                    (src.positions[i] - geom.origin) / h - cell.as_vec3()
+                } else {
+                    f
+                };
                 PSource {
                     f,
+                    g,
                     cell,
                     intensity: src.intensity[i],
                     normal: src.normals.map_or(Vec3::ZERO, |n| n[i]),
@@ -339,6 +387,7 @@ fn contributions(ps: &PSource, vz: u32, side: usize, mut visit: impl FnMut(usize
         return;
     }
     let f = ps.f;
+    let g = ps.g;
     let wz = if dz == 1 { f.z } else { 1.0 - f.z };
     if wz <= 0.0 {
         return;
@@ -350,7 +399,7 @@ fn contributions(ps: &PSource, vz: u32, side: usize, mut visit: impl FnMut(usize
         for (dx, wx) in wx.into_iter().enumerate() {
             let w = wx * wy * wz;
             if w > 0.0 {
-                let local = f - Vec3::new(dx as f32, dy as f32, dz as f32);
+                let local = g - Vec3::new(dx as f32, dy as f32, dz as f32);
                 visit(row + dy * side + dx, w, local);
             }
         }
