@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
-use lgh_core::lighting_grid::LevelCount;
+use lgh_core::lighting_grid::{Construction, LevelCount};
 use lgh_core::vpl::GridEmission;
 use lgh_render::image::check_output_path;
 use lgh_render::lgh::{JitterAt, LghSettings, MAX_SHADOW_SAMPLES, ShadowTarget};
@@ -68,6 +68,18 @@ pub enum ShadowTargetArg {
     Centroid,
     /// One of the VPLs the grid light stands for, drawn in proportion to its share.
     Representative,
+}
+
+/// How the levels above S_1 are built.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum ConstructionArg {
+    /// Each level from the level below through the exact (1/2, 1, 1/2) restriction stencil:
+    /// the all-scatter hierarchy at a fraction of the cost (an extension).
+    Restrict,
+    /// Each level gathered from the grid lights of S_1 (the paper, section 3.1).
+    Gather,
+    /// Each level splatted from all VPLs (the paper's Table 1 baseline).
+    Scatter,
 }
 
 /// Directional emission models of grid lights.
@@ -177,6 +189,10 @@ pub struct RenderArgs {
     /// box).
     #[arg(long, value_enum, default_value = "representative")]
     pub shadow_target: ShadowTargetArg,
+    /// lgh: how the levels above S_1 are built: `restrict` (exact, fastest; an extension),
+    /// `gather` from S_1 (the paper) or `scatter` from all VPLs (the paper's baseline).
+    #[arg(long, value_enum, default_value = "restrict")]
+    pub construction: ConstructionArg,
     /// lgh: how a grid light's emission depends on direction.
     #[arg(long, value_enum, default_value = "energy")]
     pub grid_emission: EmissionArg,
@@ -343,6 +359,11 @@ fn lgh_settings(args: &RenderArgs) -> Result<LghSettings> {
         shadow_target: match args.shadow_target {
             ShadowTargetArg::Centroid => ShadowTarget::Centroid,
             ShadowTargetArg::Representative => ShadowTarget::Representative,
+        },
+        construction: match args.construction {
+            ConstructionArg::Restrict => Construction::Restrict,
+            ConstructionArg::Gather => Construction::GatherFromS1,
+            ConstructionArg::Scatter => Construction::ScatterAll,
         },
         emission: match args.grid_emission {
             EmissionArg::MeanNormal => GridEmission::MeanNormal,

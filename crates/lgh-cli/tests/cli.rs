@@ -231,7 +231,7 @@ fn bench_build_reports_the_paper_table_as_json() {
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let runs = v["runs"].as_array().unwrap();
-    assert_eq!(runs.len(), 4);
+    assert_eq!(runs.len(), 6, "2 light counts x 3 variants");
     for r in runs {
         for key in [
             "lights",
@@ -243,7 +243,7 @@ fn bench_build_reports_the_paper_table_as_json() {
         ] {
             assert!(r.get(key).is_some(), "missing {key}");
         }
-        assert!(["gather", "scatter"].contains(&r["variant"].as_str().unwrap()));
+        assert!(["gather", "scatter", "restrict"].contains(&r["variant"].as_str().unwrap()));
         assert!(r["steps_ms"]["S1"].is_f64() && r["steps_ms"]["merge"].is_f64());
         let per_level = r["lights_per_level"].as_array().unwrap();
         assert_eq!(per_level.len() as u64, r["levels"].as_u64().unwrap());

@@ -193,7 +193,10 @@ fn gather_and_scatter_agree_on_s1_and_are_close_above() {
 fn restriction_equals_all_scatter() {
     for (l, levels) in [
         (synthetic(50_000, 7), LevelCount::Auto),
-        (random_box(3000, 8, Vec3::new(3.0, 1.0, 2.0), Vec3::new(-5.0, 1.0, 0.0)), LevelCount::Fixed(5)),
+        (
+            random_box(3000, 8, Vec3::new(3.0, 1.0, 2.0), Vec3::new(-5.0, 1.0, 0.0)),
+            LevelCount::Fixed(5),
+        ),
     ] {
         let r = build(&l, levels, Construction::Restrict);
         let s = build(&l, levels, Construction::ScatterAll);

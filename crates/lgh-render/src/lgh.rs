@@ -81,7 +81,8 @@ pub struct LghSettings {
     pub blur: BlurParams,
     /// Scale of the shadow-sample jitter (the demo's DevScale, 0.5).
     pub dev_scale: f32,
-    /// Construction of levels >= 2.
+    /// Construction of levels >= 2 (default: the exact restriction, an extension; the paper
+    /// gathers from S_1).
     pub construction: Construction,
     /// Build six hierarchies, one per dominant normal direction of the VPLs, instead of one
     /// (`--normal-bins`; an extension, not in the paper: grid lights then average only
@@ -142,7 +143,7 @@ impl Default for LghSettings {
             interleave: 1,
             blur: BlurParams::defaults(),
             dev_scale: 0.5,
-            construction: Construction::GatherFromS1,
+            construction: Construction::Restrict,
             normal_bins: false,
             emission: GridEmission::EnergyConserving,
             jitter: JitterAt::Ray,
@@ -260,6 +261,7 @@ impl ShadeLights {
         vpls: &Vpls,
         lowest: u32,
         from_level: u32,
+        construction: Construction,
         seed: u64,
     ) {
         let input = InputLights {
@@ -267,7 +269,7 @@ impl ShadeLights {
             intensity: &vpls.flux,
             normals: Some(&vpls.normals),
         };
-        let reps = representatives(grid, &input, from_level, seed);
+        let reps = representatives(grid, &input, from_level, construction, seed);
         if lowest == 0 {
             // A VPL stands for itself.
             for (&p, &n) in vpls.positions.iter().zip(&vpls.normals) {
@@ -482,7 +484,14 @@ pub fn render_lgh(
         lighting_ms += start.elapsed().as_secs_f64() * 1e3;
         if shadows && settings.shadow_target == ShadowTarget::Representative {
             let start = Instant::now();
-            lights.add_representatives(grid, group, lowest, settings.shadow_from_level, seed);
+            lights.add_representatives(
+                grid,
+                group,
+                lowest,
+                settings.shadow_from_level,
+                settings.construction,
+                seed,
+            );
             reps_ms += start.elapsed().as_secs_f64() * 1e3;
         }
     }

@@ -3,8 +3,9 @@
 //!
 //! Level 0 is the input lights S_0. Level 1 (S_1, the finest grid, spacing h_1) is built by a
 //! trilinear splat of the input lights onto its vertices; every coarser level l >= 2 is built
-//! from the grid lights of S_1 ("gather from S_1", the paper's method), or, for comparison,
-//! from the input lights again ("all-scatter", the paper's Table 1 baseline). A grid light has
+//! from the grid lights of S_1 ("gather from S_1", the paper's method), from the input lights
+//! again ("all-scatter", the paper's Table 1 baseline), or by exact restriction from the level
+//! below (an extension, equal to the all-scatter result; see [`Construction::Restrict`]). A grid light has
 //! intensity = the weighted intensity sum (so every level keeps the total), position = the
 //! weighted mean, deviation pi sigma per axis, and the weighted mean normal (not renormalised).
 //! Vertices whose grid light has zero intensity are removed (stream compaction) and all levels

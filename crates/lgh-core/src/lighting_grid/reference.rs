@@ -56,7 +56,7 @@ fn restrict_reference(finer: &Level, normals: bool, geom: &GridGeometry, level: 
     let mut sums: BTreeMap<(u32, u32, u32), Accum> = BTreeMap::new();
     for (s, &v) in finer.vertex.iter().enumerate() {
         let axis = |a: u32| -> Vec<(u32, f32)> {
-            if a % 2 == 0 {
+            if a.is_multiple_of(2) {
                 vec![(a / 2, 1.0)]
             } else {
                 vec![(a / 2, 0.5), (a / 2 + 1, 0.5)]
@@ -67,9 +67,13 @@ fn restrict_reference(finer: &Level, normals: bool, geom: &GridGeometry, level: 
                 for &(x, wx) in &axis(v.x) {
                     let local = (src.positions[s] - geom.origin) / h
                         - glam::Vec3::new(x as f32, y as f32, z as f32);
-                    sums.entry((z, y, x))
-                        .or_default()
-                        .add_source(&src, s, wx * wy * wz, local, inv_h2);
+                    sums.entry((z, y, x)).or_default().add_source(
+                        &src,
+                        s,
+                        wx * wy * wz,
+                        local,
+                        inv_h2,
+                    );
                 }
             }
         }

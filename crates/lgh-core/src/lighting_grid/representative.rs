@@ -18,11 +18,11 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use glam::UVec3;
+use glam::{UVec3, Vec3};
 use rayon::prelude::*;
 
-use super::splat::{corner_weight, locate};
-use super::{InputLights, LightingGrid};
+use super::splat::{corner_weight, locate, locate_finer_vertex};
+use super::{Construction, InputLights, LightingGrid};
 use crate::color::luminance;
 use crate::rng::hash;
 
@@ -36,21 +36,25 @@ pub const SLOTS: usize = 8;
 pub const NONE: u32 = u32::MAX;
 
 /// Draws [`SLOTS`] representatives for every grid light of levels 1 and
-/// `from_level..=l_max` of `grid`, which was built from `lights`. Entry `SLOTS * j + s` is
-/// slot s of grid light j: an index into `lights`, or [`NONE`] for the levels in between and
-/// for lights of zero intensity.
+/// `from_level..=l_max` of `grid`, which was built from `lights` by `construction`. Entry
+/// `SLOTS * j + s` is slot s of grid light j: an index into `lights`, or [`NONE`] for lights
+/// of zero intensity (and, for the gather, for the levels between 1 and `from_level`).
 ///
 /// The draw follows the construction: an S_1 light picks input light i in proportion to
-/// w_1(p_i) lum(I_i); a light of level l >= 2 picks an S_1 light u in proportion to
-/// w_l(p_u) lum(I_u) (the gather of section 3.1) and takes u's representative of the same
-/// slot. So every grid light with non-zero intensity has a representative, and the chance of
-/// input light i is its share of the light (exact for the gather; for the all-scatter
-/// construction, the share in the gathered hierarchy).
+/// w_1(p_i) lum(I_i). For the gather of section 3.1, a light of level l >= 2 picks an S_1
+/// light u in proportion to w_l(p_u) lum(I_u) and takes u's representative of the same slot.
+/// For the restriction (and the all-scatter hierarchy, which it equals), a light at vertex V
+/// of level l picks a light u of level l - 1 in proportion to its stencil weight
+/// w_l(v_u) lum(I_u) and takes u's representative; since w_l(p - V) = sum over u of
+/// w_l(v_u - V) w_(l-1)(p - v_u), the chance of input light i is then exactly
+/// w_l(p_i) lum(I_i) / lum(I_V). So every grid light with non-zero intensity has a
+/// representative, drawn with its share of the light.
 #[must_use]
 pub fn representatives(
     grid: &LightingGrid,
     lights: &InputLights,
     from_level: u32,
+    construction: Construction,
     seed: u64,
 ) -> Vec<u32> {
     let keys: Vec<AtomicU64> = (0..grid.len() * SLOTS)
@@ -73,35 +77,43 @@ pub fn representatives(
                 &grid,
                 &keys,
                 1,
-                p,
+                grid.locate(1, p),
                 luminance(intensity),
                 seed,
                 i as u64,
                 |_| i as u32,
             );
         });
-    let s1 = grid.grid.level_range(1);
-    let s1_reps: Vec<u32> = keys[SLOTS * s1.start..SLOTS * s1.end]
-        .iter()
-        .map(|k| unpack(k.load(Ordering::Relaxed)))
-        .collect();
-    // Levels >= 2 from S_1.
-    for l in from_level.max(2)..=grid.grid.l_max() {
-        s1.clone().into_par_iter().for_each(|u| {
-            let k = u - s1.start;
-            let reps = &s1_reps[SLOTS * k..SLOTS * (k + 1)];
+    let reps_of = |level: u32| -> (std::ops::Range<usize>, Vec<u32>) {
+        let range = grid.grid.level_range(level);
+        let reps = keys[SLOTS * range.start..SLOTS * range.end]
+            .iter()
+            .map(|k| unpack(k.load(Ordering::Relaxed)))
+            .collect();
+        (range, reps)
+    };
+    let chain = |l: u32, from: u32, located: &(dyn Fn(usize) -> (UVec3, Vec3) + Sync)| {
+        let (range, reps) = reps_of(from);
+        range.clone().into_par_iter().for_each(|u| {
+            let k = u - range.start;
+            let reps = &reps[SLOTS * k..SLOTS * (k + 1)];
             let lum = luminance(grid.grid.intensity[u]);
-            offer(
-                &grid,
-                &keys,
-                l,
-                grid.grid.position[u],
-                lum,
-                seed,
-                u as u64,
-                |s| reps[s],
-            );
+            offer(&grid, &keys, l, located(u), lum, seed, u as u64, |s| {
+                reps[s]
+            });
         });
+    };
+    for l in 2..=grid.grid.l_max() {
+        match construction {
+            Construction::GatherFromS1 if l >= from_level => {
+                chain(l, 1, &|u| grid.locate(l, grid.grid.position[u]));
+            }
+            Construction::GatherFromS1 => {}
+            Construction::Restrict | Construction::ScatterAll => {
+                let r = grid.grid.geometry.cells_per_axis(l);
+                chain(l, l - 1, &|u| locate_finer_vertex(grid.grid.vertex[u], r));
+            }
+        }
     }
     keys.into_iter().map(|k| unpack(k.into_inner())).collect()
 }
@@ -110,6 +122,14 @@ pub fn representatives(
 struct Lookup<'a> {
     grid: &'a LightingGrid,
     vkeys: &'a [u64],
+}
+
+impl Lookup<'_> {
+    /// Cell and in-cell fraction of point `p` at level `l`.
+    fn locate(&self, l: u32, p: Vec3) -> (UVec3, Vec3) {
+        let geom = self.grid.geometry;
+        locate(p, geom.origin, geom.cell_size(l), geom.cells_per_axis(l))
+    }
 }
 
 /// Vertex v as an integer ordered like (z, y, x) (coordinates are below 2^21).
@@ -122,14 +142,15 @@ fn unpack(key: u64) -> u32 {
     if key == u64::MAX { NONE } else { key as u32 }
 }
 
-/// Offers source `id` (position `p`, luminance `lum`) to the slots of the 8 level-`l`
-/// vertices around it, with weight w_l(p) lum; slot s carries the input light `rep(s)`.
+/// Offers source `id` (at cell `c` and in-cell fraction `f` of level `l`, luminance `lum`)
+/// to the slots of the 8 level-`l` vertices around it, with weight w_l lum; slot s carries
+/// the input light `rep(s)`.
 #[allow(clippy::too_many_arguments)]
 fn offer(
     lookup: &Lookup,
     keys: &[AtomicU64],
     l: u32,
-    p: glam::Vec3,
+    (c, f): (UVec3, Vec3),
     lum: f32,
     seed: u64,
     id: u64,
@@ -138,8 +159,6 @@ fn offer(
     if lum <= 0.0 {
         return;
     }
-    let geom = lookup.grid.geometry;
-    let (c, f) = locate(p, geom.origin, geom.cell_size(l), geom.cells_per_axis(l));
     let range = lookup.grid.level_range(l);
     let vertices = &lookup.vkeys[range.clone()];
     for corner in 0..8u32 {
@@ -219,40 +238,45 @@ mod tests {
     }
 
     /// Each slot of a grid light picks input light i with probability equal to its share of
-    /// the light: w_1(p_i) lum(I_i) at S_1, and sum over S_1 lights u of w_l(p_u) w_1,u(p_i)
-    /// lum(I_i) at level l >= 2 (the gather). Chi-square over 4000 seeds for every light of
-    /// both levels (p = 0.001).
+    /// the light: w_l(p_i) lum(I_i) at S_1 and, for the restriction, at every level; for the
+    /// gather, sum over S_1 lights u of w_l(p_u) w_1,u(p_i) lum(I_i) at level l >= 2.
+    /// Chi-square over 4000 seeds for every light of the three levels (p = 0.001).
     #[test]
     fn representatives_follow_the_shares() {
+        for construction in [Construction::GatherFromS1, Construction::Restrict] {
+            shares_match(construction);
+        }
+    }
+
+    fn shares_match(construction: Construction) {
         let (p, i) = lights();
         let input = InputLights {
             positions: &p,
             intensity: &i,
             normals: None,
         };
-        let (grid, _) =
-            LightingGrid::build(&input, LevelCount::Fixed(2), Construction::GatherFromS1).unwrap();
+        let (grid, _) = LightingGrid::build(&input, LevelCount::Fixed(3), construction).unwrap();
         let trials = 4000;
         let mut counts = vec![[0u32; 6]; grid.len()];
         for seed in 0..trials {
-            let reps = representatives(&grid, &input, 2, seed);
+            let reps = representatives(&grid, &input, 2, construction, seed);
             for (j, c) in counts.iter_mut().enumerate() {
                 c[reps[SLOTS * j + (seed as usize % SLOTS)] as usize] += 1;
             }
         }
         let s1 = grid.level_range(1);
-        let share_s1 =
-            |u: usize, k: usize| tent(&grid, 1, grid.vertex[u], p[k]) * f64::from(i[k].x);
+        let share =
+            |l: u32, j: usize, k: usize| tent(&grid, l, grid.vertex[j], p[k]) * f64::from(i[k].x);
         for (j, count) in counts.iter().enumerate() {
-            let l = if s1.contains(&j) { 1 } else { 2 };
+            let l = (1..=3).find(|&l| grid.level_range(l).contains(&j)).unwrap();
             let w: Vec<f64> = (0..6)
                 .map(|k| {
-                    if l == 1 {
-                        share_s1(j, k)
+                    if l == 1 || construction == Construction::Restrict {
+                        share(l, j, k)
                     } else {
                         s1.clone()
                             .map(|u| {
-                                tent(&grid, 2, grid.vertex[j], grid.position[u]) * share_s1(u, k)
+                                tent(&grid, l, grid.vertex[j], grid.position[u]) * share(1, u, k)
                             })
                             .sum()
                     }
@@ -272,7 +296,11 @@ mod tests {
             }
             // 0.999 quantiles of chi-square with 1..=5 degrees of freedom (0 when one light).
             let limit = [1e-9, 10.83, 13.82, 16.27, 18.47, 20.52][df - 1];
-            assert!(chi2 <= limit, "grid light {j}: chi2 {chi2} (df {})", df - 1);
+            assert!(
+                chi2 <= limit,
+                "{construction:?}, grid light {j} (level {l}): chi2 {chi2} (df {})",
+                df - 1
+            );
         }
     }
 
@@ -306,13 +334,13 @@ mod tests {
             normals: None,
         };
         let (grid, _) =
-            LightingGrid::build(&input, LevelCount::Auto, Construction::GatherFromS1).unwrap();
+            LightingGrid::build(&input, LevelCount::Auto, Construction::Restrict).unwrap();
         let run = |threads| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| representatives(&grid, &input, 2, 7))
+                .install(|| representatives(&grid, &input, 2, Construction::Restrict, 7))
         };
         let one = run(1);
         assert_eq!(one, run(2));

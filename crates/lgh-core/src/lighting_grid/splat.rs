@@ -221,7 +221,7 @@ pub(crate) fn locate(p: Vec3, origin: Vec3, h: f32, r: u32) -> (UVec3, Vec3) {
 /// Cell and in-cell fraction (0, 1/2 or 1 per axis, exactly) of vertex `v` of the next finer
 /// grid (2r cells per axis) in a grid of `r` cells per axis.
 #[inline]
-fn locate_finer_vertex(v: UVec3, r: u32) -> (UVec3, Vec3) {
+pub(crate) fn locate_finer_vertex(v: UVec3, r: u32) -> (UVec3, Vec3) {
     let c = (v / 2).min(UVec3::splat(r - 1));
     (c, (v - 2 * c).as_vec3() * 0.5)
 }
