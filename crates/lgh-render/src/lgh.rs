@@ -39,13 +39,14 @@ use lgh_core::lighting_grid::{
 };
 use lgh_core::rng::Rng;
 use lgh_core::sampling::raised_cosine;
-use lgh_core::vpl::{GridEmission, Vpls, light_irradiance, light_irradiance_along};
+use lgh_core::vpl::{GridEmission, Vpls, light_irradiance};
 use lgh_scene::camera::CameraFrame;
 use rayon::prelude::*;
 
 use crate::frame::Timings;
 use crate::gbuffer::GBuffer;
 use crate::interleave::BlurParams;
+use crate::light_batch::{LANES, LightBatch, PackedLight};
 use crate::ratio::{
     ShadowReservoirs, ShadowSample, ShadowSettings, halves, offer, shadowed_indirect,
 };
@@ -368,23 +369,6 @@ impl ShadeLights {
     }
 }
 
-/// What the lighting loop reads of a light, in one cache line (the loop visits the lights of
-/// a tile by index; eight separate arrays cost eight cache misses per light).
-#[derive(Clone, Copy, Debug)]
-#[repr(align(64))]
-struct PackedLight {
-    position: Vec3,
-    /// Squared reach (infinite for the top level).
-    reach2: f32,
-    normal: Vec3,
-    iso: f32,
-    /// Intensity times the interleaving scale n^2.
-    intensity: Vec3,
-    radius: f32,
-    role: LevelRole,
-    level: u8,
-}
-
 impl ShadeLights {
     /// The lights packed for the lighting loop, intensities times `scale`.
     fn packed(&self, scale: f32) -> Vec<PackedLight> {
@@ -524,89 +508,104 @@ pub fn render_lgh(
     let mut shaded: Vec<(Vec3, u32)> = vec![(Vec3::ZERO, 0); n_px];
     let mut reservoirs = ShadowReservoirs::new(n_px, k);
     let layout = reservoirs.layout();
+    let phases = n as usize;
     shaded
         .par_chunks_mut(w)
         .zip(reservoirs.rows_mut(w))
         .enumerate()
-        .for_each(|(y, (row, row_res))| {
-            for (x, px) in row.iter_mut().enumerate() {
-                let i = y * w + x;
-                if !g.is_hit(i) {
-                    continue;
-                }
-                let (xp, n) = (g.position[i], g.normal[i]);
-                let mut rng = Rng::new(&[seed, i as u64, STREAM_LGH]);
-                let (a, overdraw) = px;
-                let res = layout.pixel_mut(row_res, x);
-                for j in bins.lights_at(x as u32, y as u32) {
-                    let pl = &packed[j];
-                    let dv = pl.position - xp;
-                    let d2 = dv.length_squared();
-                    if d2 >= pl.reach2 {
+        .for_each_init(
+            || vec![LightBatch::default(); phases],
+            |batches, (y, (row, row_res))| {
+                for (x, px) in row.iter_mut().enumerate() {
+                    let i = y * w + x;
+                    if !g.is_hit(i) {
                         continue;
                     }
-                    *overdraw += 1;
-                    let inv_d = d2.sqrt().recip();
-                    let b = blend(pl.role, d2 * inv_d, pl.radius);
-                    if b <= 0.0 {
-                        continue;
+                    let (xp, n) = (g.position[i], g.normal[i]);
+                    let mut rng = Rng::new(&[seed, i as u64, STREAM_LGH]);
+                    let (a, overdraw) = px;
+                    let res = layout.pixel_mut(row_res, x);
+                    let (xu, yu) = (x as u32, y as u32);
+                    // The batch of this pixel's tile (one per sub-image column phase).
+                    let batch = &mut batches[x % phases];
+                    let key = bins.tile_key(xu, yu);
+                    if batch.key != Some(key) {
+                        batch.fill(key, &packed, bins.lights_at(xu, yu));
                     }
-                    let (l, p, nj, iso, ij) =
-                        (pl.level, pl.position, pl.normal, pl.iso, pl.intensity);
-                    let c = light_irradiance_along(dv, d2, inv_d, n, nj, iso, ij, eps2);
-                    if c == Vec3::ZERO {
-                        continue;
-                    }
-                    *a += b * c;
-                    if k > 0 && l as u32 >= settings.shadow_from_level {
-                        let sample = match (settings.jitter, representative) {
-                            // The target is drawn after selection.
-                            (JitterAt::Ray, _) => ShadowSample {
-                                q: p,
-                                n: nj,
-                                f: b * c,
-                                jitter: if representative {
-                                    Vec3::ZERO
-                                } else {
-                                    lights.deviation[j] * settings.dev_scale
-                                },
-                                light: j as u32,
-                            },
-                            (JitterAt::Candidate, true) => {
-                                let s = rng.next_u32() as usize % SLOTS;
-                                let Some((q, nq)) = lights.representative(j, s) else {
-                                    continue;
+                    let batch = &*batch;
+                    for chunk in 0..batch.chunks() {
+                        let lanes = batch.eval(chunk, xp, n, eps2);
+                        for lane in 0..LANES {
+                            if !lanes.reached[lane] {
+                                continue;
+                            }
+                            *overdraw += 1;
+                            let bc = Vec3::new(
+                                lanes.value[0][lane],
+                                lanes.value[1][lane],
+                                lanes.value[2][lane],
+                            );
+                            if bc == Vec3::ZERO {
+                                continue;
+                            }
+                            let e = chunk * LANES + lane;
+                            let (j, l) = (batch.index[e] as usize, batch.level[e]);
+                            *a += bc;
+                            if k > 0 && l as u32 >= settings.shadow_from_level {
+                                let pl = &packed[j];
+                                let (p, nj, iso, ij) =
+                                    (pl.position, pl.normal, pl.iso, pl.intensity);
+                                let b = || blend(pl.role, (p - xp).length(), pl.radius);
+                                let sample = match (settings.jitter, representative) {
+                                    // The target is drawn after selection.
+                                    (JitterAt::Ray, _) => ShadowSample {
+                                        q: p,
+                                        n: nj,
+                                        f: bc,
+                                        jitter: if representative {
+                                            Vec3::ZERO
+                                        } else {
+                                            lights.deviation[j] * settings.dev_scale
+                                        },
+                                        light: j as u32,
+                                    },
+                                    (JitterAt::Candidate, true) => {
+                                        let s = rng.next_u32() as usize % SLOTS;
+                                        let Some((q, nq)) = lights.representative(j, s) else {
+                                            continue;
+                                        };
+                                        ShadowSample {
+                                            q,
+                                            n: nq,
+                                            f: b() * light_irradiance(xp, n, q, nq, 0.0, ij, eps2),
+                                            jitter: Vec3::ZERO,
+                                            light: j as u32,
+                                        }
+                                    }
+                                    (JitterAt::Candidate, false) => {
+                                        let t = Vec3::new(
+                                            raised_cosine(halves(rng.next_u32())),
+                                            raised_cosine(halves(rng.next_u32())),
+                                            raised_cosine(halves(rng.next_u32())),
+                                        );
+                                        let dev = lights.deviation[j] * settings.dev_scale;
+                                        let q = p + t * dev;
+                                        ShadowSample {
+                                            q,
+                                            n: nj,
+                                            f: b() * light_irradiance(xp, n, q, nj, iso, ij, eps2),
+                                            jitter: Vec3::ZERO,
+                                            light: j as u32,
+                                        }
+                                    }
                                 };
-                                ShadowSample {
-                                    q,
-                                    n: nq,
-                                    f: b * light_irradiance(xp, n, q, nq, 0.0, ij, eps2),
-                                    jitter: Vec3::ZERO,
-                                    light: j as u32,
-                                }
+                                offer(res, sample, luminance(sample.f), &mut rng);
                             }
-                            (JitterAt::Candidate, false) => {
-                                let t = Vec3::new(
-                                    raised_cosine(halves(rng.next_u32())),
-                                    raised_cosine(halves(rng.next_u32())),
-                                    raised_cosine(halves(rng.next_u32())),
-                                );
-                                let dev = lights.deviation[j] * settings.dev_scale;
-                                let q = p + t * dev;
-                                ShadowSample {
-                                    q,
-                                    n: nj,
-                                    f: b * light_irradiance(xp, n, q, nj, iso, ij, eps2),
-                                    jitter: Vec3::ZERO,
-                                    light: j as u32,
-                                }
-                            }
-                        };
-                        offer(res, sample, luminance(sample.f), &mut rng);
+                        }
                     }
                 }
-            }
-        });
+            },
+        );
     out.overdraw = shaded.iter().map(|p| p.1).collect();
     t.push(
         "lighting",

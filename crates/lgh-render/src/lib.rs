@@ -41,6 +41,7 @@ pub mod gbuffer;
 pub mod image;
 pub mod interleave;
 pub mod lgh;
+pub mod light_batch;
 pub mod lights;
 pub mod metrics;
 pub mod passes;

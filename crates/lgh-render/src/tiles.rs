@@ -33,8 +33,15 @@ impl TileBins {
     #[inline]
     #[must_use]
     pub fn lights_at(&self, x: u32, y: u32) -> &[u32] {
-        let t = (y / self.tile * self.tiles_x + x / self.tile) as usize;
+        let t = self.tile_index(x, y);
         &self.lights[self.offsets[t] as usize..self.offsets[t + 1] as usize]
+    }
+
+    /// Index of the tile that holds pixel (x, y).
+    #[inline]
+    #[must_use]
+    pub fn tile_index(&self, x: u32, y: u32) -> usize {
+        (y / self.tile * self.tiles_x + x / self.tile) as usize
     }
 
     /// Bins spheres (`centres[i]`, `radii[i]`; infinite radius = everywhere) into tiles of
@@ -209,6 +216,15 @@ impl InterleavedBins {
             })
             .collect();
         Self { n, members, bins }
+    }
+
+    /// (sub-image, tile) of full-resolution pixel (x, y): two pixels have the same light list
+    /// if their keys are equal.
+    #[inline]
+    #[must_use]
+    pub fn tile_key(&self, x: u32, y: u32) -> (usize, usize) {
+        let s = crate::interleave::sub_image_of(x, y, self.n);
+        (s, self.bins[s].tile_index(x, y))
     }
 
     /// The global indices of the lights listed for full-resolution pixel (x, y) in its
