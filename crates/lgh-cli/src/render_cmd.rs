@@ -8,6 +8,7 @@ use clap::{Args, ValueEnum};
 use lgh_core::lighting_grid::{Construction, LevelCount};
 use lgh_core::vpl::GridEmission;
 use lgh_render::image::check_output_path;
+use lgh_render::ism::IsmSettings;
 use lgh_render::lgh::{JitterAt, LghSettings, MAX_SHADOW_SAMPLES, ShadowTarget};
 use lgh_render::pt::PtSettings;
 use lgh_render::sequence::Sequence;
@@ -212,6 +213,14 @@ pub struct RenderArgs {
     /// lgh, slc: screen tile edge in (sub-image) pixels for light binning.
     #[arg(long, default_value_t = 16)]
     pub tile: u32,
+    /// slc: shadows from imperfect shadow maps, as the paper renders them (section 4.3): a
+    /// 32x32 paraboloid depth map per VPL, splatted from a point cloud after the range-based
+    /// culling of its Program 1. Replaces the ray-traced shadow samples.
+    #[arg(long)]
+    pub ism: bool,
+    /// slc --ism: points splatted per map before culling (the paper uses 8192).
+    #[arg(long, default_value_t = 1024)]
+    pub ism_points: u32,
     /// slc: seed of the per-light random numbers xi_i that draw the light ranges.
     #[arg(long, default_value_t = 0)]
     pub frame_seed: u32,
@@ -384,6 +393,10 @@ fn slc_settings(args: &RenderArgs, lgh: &LghSettings, exposure: f32) -> Result<S
         shadow_samples: lgh.shadow_samples,
         frame_seed: args.frame_seed,
         filter_passes: lgh.filter_passes,
+        ism: args.ism.then(|| IsmSettings {
+            points_per_map: args.ism_points,
+            ..IsmSettings::default()
+        }),
         ..SlcSettings::default()
     })
 }
@@ -578,6 +591,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             stats["interleave"] = settings.slc.interleave.into();
             stats["frame_seed"] = settings.slc.frame_seed.into();
             stats["shadow_samples"] = settings.slc.shadow_samples.into();
+            if let Some((tested, splatted)) = l.ism_points {
+                stats["ism_points_tested"] = tested.into();
+                stats["ism_points_splatted"] = splatted.into();
+            }
         }
         let text = serde_json::to_string_pretty(&stats)?;
         std::fs::write(path, text + "\n")

@@ -213,6 +213,8 @@ pub struct SlcStats {
     pub avg_lights_per_pixel: f64,
     /// Shadow rays traced.
     pub shadow_rays: u64,
+    /// With imperfect shadow maps: points tested by the culling, and points splatted.
+    pub ism_points: Option<(u64, u64)>,
 }
 
 /// Statistics of an `lgh` frame (the paper's Table 3 and Fig. 5).
@@ -309,11 +311,12 @@ pub fn render_frame(
                     mode,
                     &s.slc,
                     s.seed,
-                    s.slc.shadow_samples > 0,
+                    s.slc.shadow_samples > 0 && s.slc.ism.is_none(),
                 );
                 slc_stats = Some(SlcStats {
                     avg_lights_per_pixel: out.avg_lights_per_pixel(&g),
                     shadow_rays: out.shadow_rays,
+                    ism_points: out.ism_points,
                 });
                 sub_timings = out.timings.0;
                 unshadowed = Some(out.unshadowed);

@@ -40,6 +40,7 @@ pub mod frame;
 pub mod gbuffer;
 pub mod image;
 pub mod interleave;
+pub mod ism;
 pub mod lgh;
 pub mod light_batch;
 pub mod lights;

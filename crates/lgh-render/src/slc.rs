@@ -16,9 +16,11 @@
 //! 4. With n > 1, the discontinuity-aware blur recombines the sub-images (section 4.4's
 //!    geometry-aware filter).
 //!
-//! The paper shadows the VPLs with imperfect shadow maps; here the `slc` methods are either
-//! unshadowed or shadowed through the same k-sample ratio estimator as LGH ([`crate::ratio`]),
-//! with each light offered with its stochastic contribution as weight.
+//! The paper shadows the VPLs with imperfect shadow maps: with [`SlcSettings::ism`] each light
+//! is tested against its map ([`crate::ism`], with the range-based point-cloud culling of
+//! section 4.3). Otherwise the `slc` methods are either unshadowed or shadowed through the
+//! same k-sample ratio estimator as LGH ([`crate::ratio`]), with each light offered with its
+//! stochastic contribution as weight.
 
 use std::time::Instant;
 
@@ -33,6 +35,7 @@ use rayon::prelude::*;
 use crate::frame::Timings;
 use crate::gbuffer::GBuffer;
 use crate::interleave::BlurParams;
+use crate::ism::{IsmSettings, PointCloud, ShadowMaps};
 use crate::ratio::{ShadowReservoirs, ShadowSample, ShadowSettings, offer, shadowed_indirect};
 use crate::tiles::InterleavedBins;
 use crate::world::World;
@@ -69,6 +72,8 @@ pub struct SlcSettings {
     pub filter_passes: u32,
     /// The discontinuity-aware blur after interleaved shading.
     pub blur: BlurParams,
+    /// Shadows from imperfect shadow maps (`--ism`) instead of the ratio estimator.
+    pub ism: Option<IsmSettings>,
 }
 
 impl Default for SlcSettings {
@@ -82,6 +87,7 @@ impl Default for SlcSettings {
             frame_seed: 0,
             filter_passes: 5,
             blur: BlurParams::defaults(),
+            ism: None,
         }
     }
 }
@@ -99,6 +105,8 @@ pub struct SlcOutput {
     pub lights_per_pixel: Vec<u32>,
     /// Shadow rays traced.
     pub shadow_rays: u64,
+    /// With imperfect shadow maps: points tested by the culling, and points splatted.
+    pub ism_points: Option<(u64, u64)>,
     /// Per-pass times: `light_ranges`, `culling`, `shading`, `interleave_blur`, then the
     /// shadow passes.
     pub timings: Timings,
@@ -148,7 +156,8 @@ fn light_ranges(vpls: &Vpls, mode: RangeMode, s: &SlcSettings, scale: f32, eps2:
 }
 
 /// Renders the indirect light of `vpls` with stochastic (or clamped) tiled lighting. With
-/// `shadows == false` no sample is selected and no ray traced.
+/// `shadows == false` no sample is selected and no ray traced (imperfect shadow maps, if
+/// set, still apply).
 #[allow(clippy::too_many_arguments)]
 #[must_use]
 pub fn render_slc(
@@ -191,6 +200,19 @@ pub fn render_slc(
     } else {
         0
     };
+    let maps = settings.ism.map(|ism| {
+        t.time("ism", || {
+            let cloud = PointCloud::sample(world, ism.cloud_points as usize, seed);
+            ShadowMaps::build(
+                &cloud,
+                &vpls.positions,
+                &vpls.normals,
+                &ranges.range,
+                &ism,
+                seed,
+            )
+        })
+    });
     // Step 3: shading.
     let w = g.width as usize;
     let mut shaded: Vec<(Vec3, u32)> = vec![(Vec3::ZERO, 0); n_px];
@@ -219,6 +241,9 @@ pub fn render_slc(
                         continue;
                     }
                     *count += 1;
+                    if maps.as_ref().is_some_and(|m| !m.visible(j, xp)) {
+                        continue;
+                    }
                     // vpl_irradiance carries f(l) = 1 / (l^2 + eps^2); the stochastic
                     // fall-off max(alpha, f) is f x max(1, alpha / f).
                     let raise = (ranges.alpha[j] * (d2 + eps2)).max(1.0);
@@ -256,6 +281,7 @@ pub fn render_slc(
         ratio: shadowed.ratio,
         lights_per_pixel,
         shadow_rays: shadowed.rays,
+        ism_points: maps.map(|m| (m.points_tested, m.points_splatted)),
         timings: t,
     }
 }
