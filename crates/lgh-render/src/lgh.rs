@@ -37,6 +37,7 @@ use lgh_core::lighting_grid::representative::{NONE, SLOTS, representatives};
 use lgh_core::lighting_grid::{
     Construction, GridBuilder, GridError, InputLights, LevelCount, LightingGrid,
 };
+use lgh_core::reservoir::Reservoir;
 use lgh_core::rng::Rng;
 use lgh_core::sampling::raised_cosine;
 use lgh_core::vpl::{GridEmission, Vpls, light_irradiance};
@@ -48,7 +49,8 @@ use crate::gbuffer::GBuffer;
 use crate::interleave::BlurParams;
 use crate::light_batch::{LANES, LightBatch, PackedLight};
 use crate::ratio::{
-    ShadowReservoirs, ShadowSample, ShadowSettings, halves, offer, shadowed_indirect,
+    ReservoirLayout, ShadowReservoirs, ShadowSample, ShadowSettings, halves, offer,
+    shadowed_indirect,
 };
 use crate::tiles::InterleavedBins;
 use crate::world::World;
@@ -388,6 +390,135 @@ impl ShadeLights {
     }
 }
 
+/// What the lighting loop of one row reads.
+struct RowContext<'a> {
+    g: &'a GBuffer,
+    bins: &'a InterleavedBins,
+    packed: &'a [PackedLight],
+    lights: &'a ShadeLights,
+    settings: &'a LghSettings,
+    layout: ReservoirLayout,
+    k: usize,
+    representative: bool,
+    eps2: f32,
+    seed: u64,
+    /// Interleaving n: pixels of a row cycle through n sub-images.
+    phases: usize,
+}
+
+/// The lighting loop over row `y` (LGH 2019 section 3.2 and Appendix A): per pixel, the sum
+/// A of B_l(d) f_j over its tile's lights, the overdraw, and the k reservoirs of shadow
+/// candidates.
+fn shade_row(
+    ctx: &RowContext,
+    y: usize,
+    row: &mut [(Vec3, u32)],
+    row_res: &mut [Reservoir<ShadowSample>],
+    batches: &mut [LightBatch],
+) {
+    let RowContext {
+        g,
+        bins,
+        packed,
+        lights,
+        settings,
+        layout,
+        k,
+        representative,
+        eps2,
+        seed,
+        ..
+    } = *ctx;
+    let w = g.width as usize;
+    for (x, px) in row.iter_mut().enumerate() {
+        let i = y * w + x;
+        if !g.is_hit(i) {
+            continue;
+        }
+        let (xp, n) = (g.position[i], g.normal[i]);
+        let mut rng = Rng::new(&[seed, i as u64, STREAM_LGH]);
+        let (a, overdraw) = px;
+        let res = layout.pixel_mut(row_res, x);
+        let (xu, yu) = (x as u32, y as u32);
+        // The batch of this pixel's tile (one per sub-image column phase).
+        let batch = &mut batches[x % ctx.phases];
+        let key = bins.tile_key(xu, yu);
+        if batch.key != Some(key) {
+            batch.fill(key, packed, bins.lights_at(xu, yu));
+        }
+        let batch = &*batch;
+        for chunk in 0..batch.chunks() {
+            let lanes = batch.eval(chunk, xp, n, eps2);
+            for lane in 0..LANES {
+                if !lanes.reached[lane] {
+                    continue;
+                }
+                *overdraw += 1;
+                let bc = Vec3::new(
+                    lanes.value[0][lane],
+                    lanes.value[1][lane],
+                    lanes.value[2][lane],
+                );
+                if bc == Vec3::ZERO {
+                    continue;
+                }
+                let e = chunk * LANES + lane;
+                let (j, l) = (batch.index[e] as usize, batch.level[e]);
+                *a += bc;
+                if k > 0 && l as u32 >= settings.shadow_from_level {
+                    let pl = &packed[j];
+                    let (p, nj, iso, ij) = (pl.position, pl.normal, pl.iso, pl.intensity);
+                    let b = || blend(pl.role, (p - xp).length(), pl.radius);
+                    let sample = match (settings.jitter, representative) {
+                        // The target is drawn after selection.
+                        (JitterAt::Ray, _) => ShadowSample {
+                            q: p,
+                            n: nj,
+                            f: bc,
+                            jitter: if representative {
+                                Vec3::ZERO
+                            } else {
+                                lights.deviation[j] * settings.dev_scale
+                            },
+                            light: j as u32,
+                        },
+                        (JitterAt::Candidate, true) => {
+                            let s = rng.next_u32() as usize % SLOTS;
+                            let Some((q, nq)) = lights.representative(j, s) else {
+                                continue;
+                            };
+                            ShadowSample {
+                                q,
+                                n: nq,
+                                f: b() * light_irradiance(xp, n, q, nq, 0.0, ij, eps2),
+                                jitter: Vec3::ZERO,
+                                light: j as u32,
+                            }
+                        }
+                        (JitterAt::Candidate, false) => {
+                            let t = Vec3::new(
+                                raised_cosine(halves(rng.next_u32())),
+                                raised_cosine(halves(rng.next_u32())),
+                                raised_cosine(halves(rng.next_u32())),
+                            );
+                            let dev = lights.deviation[j] * settings.dev_scale;
+                            let q = p + t * dev;
+                            ShadowSample {
+                                q,
+                                n: nj,
+                                f: b() * light_irradiance(xp, n, q, nj, iso, ij, eps2),
+                                jitter: Vec3::ZERO,
+                                light: j as u32,
+                            }
+                        }
+                    };
+                    offer(res, sample, luminance(sample.f), &mut rng);
+                }
+            }
+        }
+    }
+}
+
 /// Splits VPLs into six groups by the dominant axis and sign of their normal (+x, -x, +y,
 /// -y, +z, -z), so that each hierarchy only averages normals that roughly agree.
 fn split_by_normal(vpls: &Vpls) -> Vec<Vpls> {
@@ -508,103 +639,26 @@ pub fn render_lgh(
     let mut shaded: Vec<(Vec3, u32)> = vec![(Vec3::ZERO, 0); n_px];
     let mut reservoirs = ShadowReservoirs::new(n_px, k);
     let layout = reservoirs.layout();
-    let phases = n as usize;
+    let ctx = RowContext {
+        g,
+        bins: &bins,
+        packed: &packed,
+        lights: &lights,
+        settings,
+        layout,
+        k,
+        representative,
+        eps2,
+        seed,
+        phases: n as usize,
+    };
     shaded
         .par_chunks_mut(w)
         .zip(reservoirs.rows_mut(w))
         .enumerate()
         .for_each_init(
-            || vec![LightBatch::default(); phases],
-            |batches, (y, (row, row_res))| {
-                for (x, px) in row.iter_mut().enumerate() {
-                    let i = y * w + x;
-                    if !g.is_hit(i) {
-                        continue;
-                    }
-                    let (xp, n) = (g.position[i], g.normal[i]);
-                    let mut rng = Rng::new(&[seed, i as u64, STREAM_LGH]);
-                    let (a, overdraw) = px;
-                    let res = layout.pixel_mut(row_res, x);
-                    let (xu, yu) = (x as u32, y as u32);
-                    // The batch of this pixel's tile (one per sub-image column phase).
-                    let batch = &mut batches[x % phases];
-                    let key = bins.tile_key(xu, yu);
-                    if batch.key != Some(key) {
-                        batch.fill(key, &packed, bins.lights_at(xu, yu));
-                    }
-                    let batch = &*batch;
-                    for chunk in 0..batch.chunks() {
-                        let lanes = batch.eval(chunk, xp, n, eps2);
-                        for lane in 0..LANES {
-                            if !lanes.reached[lane] {
-                                continue;
-                            }
-                            *overdraw += 1;
-                            let bc = Vec3::new(
-                                lanes.value[0][lane],
-                                lanes.value[1][lane],
-                                lanes.value[2][lane],
-                            );
-                            if bc == Vec3::ZERO {
-                                continue;
-                            }
-                            let e = chunk * LANES + lane;
-                            let (j, l) = (batch.index[e] as usize, batch.level[e]);
-                            *a += bc;
-                            if k > 0 && l as u32 >= settings.shadow_from_level {
-                                let pl = &packed[j];
-                                let (p, nj, iso, ij) =
-                                    (pl.position, pl.normal, pl.iso, pl.intensity);
-                                let b = || blend(pl.role, (p - xp).length(), pl.radius);
-                                let sample = match (settings.jitter, representative) {
-                                    // The target is drawn after selection.
-                                    (JitterAt::Ray, _) => ShadowSample {
-                                        q: p,
-                                        n: nj,
-                                        f: bc,
-                                        jitter: if representative {
-                                            Vec3::ZERO
-                                        } else {
-                                            lights.deviation[j] * settings.dev_scale
-                                        },
-                                        light: j as u32,
-                                    },
-                                    (JitterAt::Candidate, true) => {
-                                        let s = rng.next_u32() as usize % SLOTS;
-                                        let Some((q, nq)) = lights.representative(j, s) else {
-                                            continue;
-                                        };
-                                        ShadowSample {
-                                            q,
-                                            n: nq,
-                                            f: b() * light_irradiance(xp, n, q, nq, 0.0, ij, eps2),
-                                            jitter: Vec3::ZERO,
-                                            light: j as u32,
-                                        }
-                                    }
-                                    (JitterAt::Candidate, false) => {
-                                        let t = Vec3::new(
-                                            raised_cosine(halves(rng.next_u32())),
-                                            raised_cosine(halves(rng.next_u32())),
-                                            raised_cosine(halves(rng.next_u32())),
-                                        );
-                                        let dev = lights.deviation[j] * settings.dev_scale;
-                                        let q = p + t * dev;
-                                        ShadowSample {
-                                            q,
-                                            n: nj,
-                                            f: b() * light_irradiance(xp, n, q, nj, iso, ij, eps2),
-                                            jitter: Vec3::ZERO,
-                                            light: j as u32,
-                                        }
-                                    }
-                                };
-                                offer(res, sample, luminance(sample.f), &mut rng);
-                            }
-                        }
-                    }
-                }
-            },
+            || vec![LightBatch::default(); ctx.phases],
+            |batches, (y, (row, row_res))| shade_row(&ctx, y, row, row_res, batches),
         );
     out.overdraw = shaded.iter().map(|p| p.1).collect();
     t.push(
