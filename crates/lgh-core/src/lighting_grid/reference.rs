@@ -11,6 +11,17 @@ use glam::UVec3;
 use super::splat::{Accum, Level, Sources, corner_weight, level_from_sums, locate};
 use super::{Construction, GridError, GridGeometry, InputLights, LightingGrid};
 
+/// The level from sums keyed by (z, y, x), which iterate in the parallel builder's vertex
+/// order.
+fn finish(sums: BTreeMap<(u32, u32, u32), Accum>, geom: &GridGeometry, level: u32) -> Level {
+    level_from_sums(
+        sums.into_iter()
+            .map(|((z, y, x), a)| (UVec3::new(x, y, z), a)),
+        geom,
+        level,
+    )
+}
+
 fn splat_reference(src: &Sources, geom: &GridGeometry, level: u32) -> Level {
     let h = geom.cell_size(level);
     let r = geom.cells_per_axis(level);
@@ -38,12 +49,7 @@ fn splat_reference(src: &Sources, geom: &GridGeometry, level: u32) -> Level {
             }
         }
     }
-    level_from_sums(
-        sums.into_iter()
-            .map(|((z, y, x), a)| (UVec3::new(x, y, z), a)),
-        geom,
-        level,
-    )
+    finish(sums, geom, level)
 }
 
 /// Level `level` by the restriction stencil from the grid lights of level `level - 1`
@@ -78,12 +84,7 @@ fn restrict_reference(finer: &Level, normals: bool, geom: &GridGeometry, level: 
             }
         }
     }
-    level_from_sums(
-        sums.into_iter()
-            .map(|((z, y, x), a)| (UVec3::new(x, y, z), a)),
-        geom,
-        level,
-    )
+    finish(sums, geom, level)
 }
 
 /// Builds the hierarchy with the same geometry as `grid_geometry` (take it from a parallel
