@@ -136,8 +136,13 @@ impl Animation {
         let mut hi = vec![Vec3::splat(f32::NEG_INFINITY); count];
         let mut vertex_object = vec![u32::MAX; rest.positions.len()];
         for (tri, &o) in rest.triangles.iter().zip(&rest.objects) {
+            if o as usize >= count {
+                continue; // an object without a name cannot be animated
+            }
             for &v in tri {
-                let p = rest.positions[v as usize];
+                let Some(&p) = rest.positions.get(v as usize) else {
+                    continue;
+                };
                 lo[o as usize] = lo[o as usize].min(p);
                 hi[o as usize] = hi[o as usize].max(p);
                 vertex_object[v as usize] = o;
@@ -146,11 +151,16 @@ impl Animation {
         let transforms: Vec<Option<Mat4>> = (0..count)
             .map(|o| self.object_transform(o as u32, (lo[o] + hi[o]) * 0.5, t))
             .collect();
-        for (v, &o) in vertex_object.iter().enumerate() {
+        let vertices = posed
+            .positions
+            .iter_mut()
+            .zip(&mut posed.normals)
+            .zip(rest.positions.iter().zip(&rest.normals))
+            .zip(&vertex_object);
+        for (((p, n), (&rp, &rn)), &o) in vertices {
             let m = transforms.get(o as usize).copied().flatten();
-            posed.positions[v] =
-                m.map_or(rest.positions[v], |m| m.transform_point3(rest.positions[v]));
-            posed.normals[v] = m.map_or(rest.normals[v], |m| m.transform_vector3(rest.normals[v]));
+            *p = m.map_or(rp, |m| m.transform_point3(rp));
+            *n = m.map_or(rn, |m| m.transform_vector3(rn));
         }
         true
     }
