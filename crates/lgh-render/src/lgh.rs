@@ -327,22 +327,17 @@ impl ShadeLights {
                     };
                     // The representatives' contributions as VPLs of the light's intensity.
                     let weights: [f32; SLOTS] = std::array::from_fn(|s| {
-                        let (q, nq) = (
-                            self.rep_position[SLOTS * j + s],
-                            self.rep_normal[SLOTS * j + s],
-                        );
-                        if nq == Vec3::ZERO {
-                            return 0.0;
-                        }
-                        luminance(light_irradiance(
-                            xp,
-                            nx,
-                            q,
-                            nq,
-                            0.0,
-                            self.intensity[j],
-                            eps2,
-                        ))
+                        self.representative(j, s).map_or(0.0, |(q, nq)| {
+                            luminance(light_irradiance(
+                                xp,
+                                nx,
+                                q,
+                                nq,
+                                0.0,
+                                self.intensity[j],
+                                eps2,
+                            ))
+                        })
                     });
                     let total: f32 = weights.iter().sum();
                     if total <= 0.0 {
@@ -369,9 +364,7 @@ impl ShadeLights {
             }
         });
     }
-}
 
-impl ShadeLights {
     /// The lights packed for the lighting loop, intensities times `scale`.
     fn packed(&self, scale: f32) -> Vec<PackedLight> {
         (0..self.position.len())
