@@ -111,12 +111,31 @@ pub fn keep_point(p: Vec3, n: Vec3, q: Vec3, m: Vec3, range2: f32) -> bool {
     rel.dot(n) > 0.0 && rel.dot(m) > 0.0 && rel.length_squared() < range2
 }
 
-/// Paraboloid coordinates in [-1, 1]^2 of the unit direction `w` around the normal `m` with
-/// tangents (t, b); only the upper hemisphere (w . m >= 0) maps inside the unit disk.
-#[inline]
-fn paraboloid(w: Vec3, m: Vec3, t: Vec3, b: Vec3) -> Vec2 {
-    let z = 1.0 + w.dot(m);
-    Vec2::new(w.dot(t), w.dot(b)) / z
+/// The paraboloid map frame of one VPL: its position q, normal m and tangents (t, b), set
+/// once per frame (shading looks the map up for every pixel and light).
+#[derive(Clone, Copy, Debug, Default)]
+struct MapFrame {
+    q: Vec3,
+    m: Vec3,
+    t: Vec3,
+    b: Vec3,
+}
+
+impl MapFrame {
+    fn new(q: Vec3, m: Vec3) -> Self {
+        let (t, b) = orthonormal_basis(m);
+        Self { q, m, t, b }
+    }
+
+    /// The texel (x, y) of a `res`^2 map that the unit direction `w` falls in, by the
+    /// paraboloid coordinates (w . t, w . b) / (1 + w . m) in [-1, 1]^2 (the upper
+    /// hemisphere maps inside the unit disk); may lie outside the map.
+    #[inline]
+    fn texel(&self, w: Vec3, res: usize) -> (i32, i32) {
+        let uv = Vec2::new(w.dot(self.t), w.dot(self.b)) / (1.0 + w.dot(self.m));
+        let to = |c: f32| ((c * 0.5 + 0.5) * res as f32) as i32;
+        (to(uv.x), to(uv.y))
+    }
 }
 
 /// One depth map per VPL.
@@ -124,8 +143,7 @@ fn paraboloid(w: Vec3, m: Vec3, t: Vec3, b: Vec3) -> Vec2 {
 pub struct ShadowMaps {
     resolution: u32,
     depth: Vec<f32>,
-    vpl_position: Vec<Vec3>,
-    vpl_normal: Vec<Vec3>,
+    frames: Vec<MapFrame>,
     /// Points tested against Program 1 (all maps).
     pub points_tested: u64,
     /// Points that passed the culling and were splatted.
@@ -155,16 +173,21 @@ impl ShadowMaps {
         } else {
             0.0
         };
+        let frames: Vec<MapFrame> = positions
+            .par_iter()
+            .zip(normals)
+            .map(|(&q, &m)| MapFrame::new(q, m))
+            .collect();
         let splatted: u64 = depth
             .par_chunks_mut(texels)
+            .zip(&frames)
             .enumerate()
-            .map(|(i, map)| {
-                let (q, m) = (positions[i], normals[i]);
+            .map(|(i, (map, frame))| {
+                let (q, m) = (frame.q, frame.m);
                 let range2 = range[i] * range[i];
                 if per_map == 0 || range2 <= 0.0 || m == Vec3::ZERO {
                     return 0;
                 }
-                let (t, b) = orthonormal_basis(m);
                 let start = (hash(&[seed, i as u64, 0x15b]) % cloud.len() as u64) as usize;
                 let mut kept = 0u64;
                 for k in 0..per_map {
@@ -176,12 +199,10 @@ impl ShadowMaps {
                     kept += 1;
                     let rel = p - q;
                     let dist = rel.length();
-                    let uv = paraboloid(rel / dist, m, t, b);
                     // Projected half-size in texels: the disk's angle over the paraboloid's
                     // about 4 / res radians per texel near the pole.
                     let half = ((point_radius / dist) * res as f32 * 0.25).min(3.0) as i32;
-                    let cx = ((uv.x * 0.5 + 0.5) * res as f32) as i32;
-                    let cy = ((uv.y * 0.5 + 0.5) * res as f32) as i32;
+                    let (cx, cy) = frame.texel(rel / dist, res);
                     for y in (cy - half).max(0)..=(cy + half).min(res as i32 - 1) {
                         for x in (cx - half).max(0)..=(cx + half).min(res as i32 - 1) {
                             let d = &mut map[y as usize * res + x as usize];
@@ -195,8 +216,7 @@ impl ShadowMaps {
         Self {
             resolution: res as u32,
             depth,
-            vpl_position: positions.to_vec(),
-            vpl_normal: normals.to_vec(),
+            frames,
             points_tested: (positions.len() * per_map) as u64,
             points_splatted: splatted,
         }
@@ -207,17 +227,16 @@ impl ShadowMaps {
     #[inline]
     #[must_use]
     pub fn visible(&self, i: usize, x: Vec3) -> bool {
-        let (q, m) = (self.vpl_position[i], self.vpl_normal[i]);
-        let rel = x - q;
+        let frame = &self.frames[i];
+        let rel = x - frame.q;
         let dist = rel.length();
-        if dist <= 0.0 || rel.dot(m) <= 0.0 {
+        if dist <= 0.0 || rel.dot(frame.m) <= 0.0 {
             return true;
         }
-        let (t, b) = orthonormal_basis(m);
-        let uv = paraboloid(rel / dist, m, t, b);
         let res = self.resolution as usize;
-        let tx = (((uv.x * 0.5 + 0.5) * res as f32) as usize).min(res - 1);
-        let ty = (((uv.y * 0.5 + 0.5) * res as f32) as usize).min(res - 1);
+        let (tx, ty) = frame.texel(rel / dist, res);
+        let last = res as i32 - 1;
+        let (tx, ty) = (tx.clamp(0, last) as usize, ty.clamp(0, last) as usize);
         dist <= self.depth[i * res * res + ty * res + tx] * 1.03
     }
 }
