@@ -56,7 +56,6 @@ impl<'a> InputLights<'a> {
             normals: self.normals,
             mass: None,
             variance: None,
-            ordered: false,
             finer_vertices: None,
         }
     }

@@ -41,9 +41,6 @@ pub struct Sources<'a> {
     pub mass: Option<&'a [f32]>,
     /// Per-axis positional variance of each source (the spread of the inputs it stands for).
     pub variance: Option<&'a [Vec3]>,
-    /// True if the sources are already in vertex order of a finer grid (the lights of S_1):
-    /// the locality sort is skipped.
-    pub ordered: bool,
     /// For the restriction from the next finer level: the sources' integer vertex
     /// coordinates there. The trilinear weights then come from the vertex (fractions 0, 1/2
     /// or 1, exactly), while the moments use the source's position; see
@@ -83,19 +80,19 @@ impl Level {
 
     fn push(&mut self, v: UVec3, a: &Accum, geom: &GridGeometry, level: u32) {
         let h = f64::from(geom.cell_size(level));
-        let mean = a.p / a.w;
+        let mean = a.p() / a.w();
         self.vertex.push(v);
         self.position
             .push((geom.origin.as_dvec3() + (v.as_dvec3() + mean) * h).as_vec3());
-        self.intensity.push(a.i.as_vec3());
+        self.intensity.push(a.i().as_vec3());
         self.variance
-            .push(((a.q / a.w - mean * mean).max(DVec3::ZERO) * (h * h)).as_vec3());
-        self.normal.push((a.n / a.w).as_vec3());
-        self.mass.push(a.w as f32);
+            .push(((a.q() / a.w() - mean * mean).max(DVec3::ZERO) * (h * h)).as_vec3());
+        self.normal.push((a.n() / a.w()).as_vec3());
+        self.mass.push(a.w() as f32);
     }
 
     /// This level's grid lights as sources for a coarser level (the gather from S_1): each
-    /// counts with its mass and its variance, and is already in vertex order. `normals` says
+    /// counts with its mass and its variance. `normals` says
     /// whether the input lights had normals.
     #[must_use]
     pub fn as_sources(&self, normals: bool) -> Sources<'_> {
@@ -105,7 +102,6 @@ impl Level {
             normals: normals.then_some(&self.normal[..]),
             mass: Some(&self.mass),
             variance: Some(&self.variance),
-            ordered: true,
             finer_vertices: None,
         }
     }
@@ -156,38 +152,87 @@ impl Level {
 
 /// Sums of one vertex: W, P (local, cell units), Q (local, squared), intensity, normal.
 /// Double precision: a coarse vertex sums millions of contributions, which f32 would round
-/// to a relative error near 1e-4.
+/// to a relative error near 1e-4. Stored as one padded array `[W, P, Q, I, N, 0, 0, 0]` so
+/// that adding a weighted contribution is a plain loop the compiler vectorises.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Accum {
-    pub w: f64,
-    pub p: DVec3,
-    pub q: DVec3,
-    pub i: DVec3,
-    pub n: DVec3,
+    s: [f64; 16],
 }
 
 impl Accum {
-    /// Adds prepared source `ps` with trilinear weight `w`, whose moment position is at
-    /// local offset `local` (cell units) from the vertex.
-    #[inline(always)]
-    fn add(&mut self, ps: &PSource, w: f32, local: Vec3) {
-        let wm = f64::from(w * ps.mass);
-        let local = local.as_dvec3();
-        self.w += wm;
-        self.p += wm * local;
-        self.q += wm * (local * local + ps.variance.as_dvec3());
-        self.i += f64::from(w) * ps.intensity.as_dvec3();
-        self.n += wm * ps.normal.as_dvec3();
+    fn from_parts(w: f64, p: DVec3, q: DVec3, i: DVec3, n: DVec3) -> Self {
+        let mut s = [0.0; 16];
+        s[0] = w;
+        for (k, v) in [p, q, i, n].into_iter().enumerate() {
+            s[1 + 3 * k..4 + 3 * k].copy_from_slice(&v.to_array());
+        }
+        Self { s }
     }
 
-    /// Adds another partial sum.
-    #[inline]
-    fn merge(&mut self, o: &Accum) {
-        self.w += o.w;
-        self.p += o.p;
-        self.q += o.q;
-        self.i += o.i;
-        self.n += o.n;
+    fn part(&self, k: usize) -> DVec3 {
+        DVec3::new(self.s[1 + 3 * k], self.s[2 + 3 * k], self.s[3 + 3 * k])
+    }
+
+    /// Total weight W.
+    pub fn w(&self) -> f64 {
+        self.s[0]
+    }
+
+    /// Weighted local position sum P.
+    pub fn p(&self) -> DVec3 {
+        self.part(0)
+    }
+
+    /// Weighted local squared position (plus variance) sum Q.
+    pub fn q(&self) -> DVec3 {
+        self.part(1)
+    }
+
+    /// Weighted intensity sum.
+    pub fn i(&self) -> DVec3 {
+        self.part(2)
+    }
+
+    /// Weighted normal sum.
+    pub fn n(&self) -> DVec3 {
+        self.part(3)
+    }
+
+    /// The moments of prepared source `ps` for a vertex at offset 0 from its cell: W = m,
+    /// P = m g, Q = m (g^2 + var), intensity, m n. A contribution is these times the
+    /// trilinear weight ([`Accum::add_scaled`]); [`Accum::shifted`] moves them to another
+    /// corner. Computed once per source and layer instead of once per corner.
+    #[inline(always)]
+    fn moments(ps: &PSource) -> Self {
+        let m = f64::from(ps.mass);
+        let g = ps.g.as_dvec3();
+        Self::from_parts(
+            m,
+            m * g,
+            m * (g * g + ps.variance.as_dvec3()),
+            ps.intensity.as_dvec3(),
+            m * ps.normal.as_dvec3(),
+        )
+    }
+
+    /// These moments seen from a vertex one cell further along `axis`: the local position g
+    /// becomes g - 1 there, so P - W and Q - (2 P - W) (exact algebra:
+    /// (g - 1)^2 = g^2 - 2 g + 1).
+    #[inline(always)]
+    fn shifted(&self, axis: usize) -> Self {
+        let mut s = self.s;
+        let (w, p) = (s[0], s[1 + axis]);
+        s[1 + axis] = p - w;
+        s[4 + axis] -= 2.0 * p - w;
+        Self { s }
+    }
+
+    /// Adds moments `m` with trilinear weight `w`.
+    #[inline(always)]
+    fn add_scaled(&mut self, w: f64, m: &Self) {
+        for (a, b) in self.s.iter_mut().zip(&m.s) {
+            *a += w * b;
+        }
     }
 
     /// Adds source `s` of `src` (unprepared) with weight `w` at local offset `local`;
@@ -200,13 +245,17 @@ impl Accum {
             .as_dvec3();
         let wm = f64::from(w * m);
         let local = local.as_dvec3();
-        self.w += wm;
-        self.p += wm * local;
-        self.q += wm * (local * local + var);
-        self.i += f64::from(w) * src.intensity[s].as_dvec3();
-        if let Some(n) = src.normals {
-            self.n += wm * n[s].as_dvec3();
-        }
+        let n = src.normals.map_or(DVec3::ZERO, |n| wm * n[s].as_dvec3());
+        self.add_scaled(
+            1.0,
+            &Self::from_parts(
+                wm,
+                wm * local,
+                wm * (local * local + var),
+                f64::from(w) * src.intensity[s].as_dvec3(),
+                n,
+            ),
+        );
     }
 }
 
@@ -214,8 +263,10 @@ impl Accum {
 #[inline]
 pub(crate) fn locate(p: Vec3, origin: Vec3, h: f32, r: u32) -> (UVec3, Vec3) {
     let u = (p - origin) / h;
-    let c = u.floor().clamp(Vec3::ZERO, Vec3::splat((r - 1) as f32));
-    ((c.as_uvec3()), (u - c).clamp(Vec3::ZERO, Vec3::ONE))
+    // Truncation after the clamp is the floor (the clamped value is not negative), without
+    // the libm call that `floor` costs on baseline x86-64.
+    let c = u.clamp(Vec3::ZERO, Vec3::splat((r - 1) as f32)).as_uvec3();
+    (c, (u - c.as_vec3()).clamp(Vec3::ZERO, Vec3::ONE))
 }
 
 /// Cell and in-cell fraction (0, 1/2 or 1 per axis, exactly) of vertex `v` of the next finer
@@ -233,15 +284,17 @@ pub(crate) fn corner_weight(f: Vec3, d: UVec3) -> f32 {
     pick(f.x, d.x) * pick(f.y, d.y) * pick(f.z, d.z)
 }
 
-/// Sources per task: a layer with more sources is split into chunks whose partial sums are
-/// added in chunk order.
-pub const CHUNK: usize = 1 << 15;
+/// Source visits per task: consecutive vertex rows of one layer are grouped into a band
+/// until the cell rows they read hold about this many sources. A single crowded row (the
+/// coarsest levels of the all-scatter construction) is one band whatever its size.
+pub const BAND_SOURCES: usize = 1 << 15;
 
 /// Sources per chunk of the parallel counting sort.
 const SORT_CHUNK: usize = 1 << 16;
 
-/// One source, prepared for a level: its cell, in-cell fraction and attributes, packed so
-/// that the hot loop reads memory sequentially (variance in cell units).
+/// One source, prepared for a level: its cell x, in-cell fraction and attributes, packed so
+/// that the hot loop reads memory sequentially (variance in cell units). Its cell row (y, z)
+/// is where it is stored.
 #[derive(Clone, Copy, Debug, Default)]
 struct PSource {
     /// In-cell fraction that gives the trilinear weights.
@@ -249,7 +302,7 @@ struct PSource {
     /// In-cell position of the moments (P, Q): `f`, except for a restriction, where `f` is
     /// the fine vertex's fraction and `g` that of the fine grid light's mean position.
     g: Vec3,
-    cell: UVec3,
+    cell_x: u32,
     intensity: Vec3,
     normal: Vec3,
     mass: f32,
@@ -258,101 +311,47 @@ struct PSource {
 
 /// Reusable working memory of the splat: a renderer that rebuilds its hierarchy every frame
 /// keeps one, so that no step pays for fresh memory (page faults cost about as much as the
-/// arithmetic here). After [`Workspace::prepare`], bucket z of the prepared sources is
-/// `src[start[z]..start[z + 1]]`.
+/// arithmetic here). After [`Workspace::prepare`], the sources of cell row (y, z) are
+/// `src[row_start[z r + y]..row_start[z r + y + 1]]`, in input order.
 #[derive(Debug, Default)]
 pub struct Workspace {
-    located: Vec<(UVec3, Vec3)>,
-    order: Vec<u64>,
+    by_row: Vec<Located>,
     src: Vec<PSource>,
-    start: Vec<usize>,
+    z_start: Vec<usize>,
+    row_start: Vec<usize>,
+    bands: Vec<Band>,
     r: u32,
 }
 
+/// A located source as the sorts move it: its cell, in-cell fraction and input index, so
+/// that the passes after a sort read memory in order.
+#[derive(Clone, Copy, Debug, Default)]
+struct Located {
+    cell: UVec3,
+    f: Vec3,
+    index: u32,
+}
+
+/// Vertex rows `y0..y1` of vertex layer `z`: one task of the splat.
+#[derive(Clone, Copy, Debug)]
+struct Band {
+    z: u32,
+    y0: u32,
+    y1: u32,
+}
+
 impl Workspace {
-    /// Locates and buckets the sources; with `pack`, also sorts the buckets (unordered
-    /// sources) and packs the attributes (not needed to count vertices).
-    fn prepare(&mut self, src: &Sources, geom: &GridGeometry, level: u32, pack: bool) {
+    /// Locates the sources, sorts them by cell row (stable: input order within a row), packs
+    /// their attributes in that order, and cuts the vertex layers into bands.
+    fn prepare(&mut self, src: &Sources, geom: &GridGeometry, level: u32) {
         let h = geom.cell_size(level);
-        let r = geom.cells_per_axis(level);
-        self.r = r;
-        match src.finer_vertices {
-            None => src
-                .positions
-                .par_iter()
-                .map(|&p| locate(p, geom.origin, h, r))
-                .collect_into_vec(&mut self.located),
-            Some(v) => v
-                .par_iter()
-                .map(|&v| locate_finer_vertex(v, r))
-                .collect_into_vec(&mut self.located),
-        }
-        // Stable counting sort by cell z, in parallel: every chunk of sources buckets itself
-        // (keeping input order), then every z bucket concatenates the chunks' pieces in chunk
-        // order. The packed key (y, x, index) lets a later sort order a bucket by row, column
-        // and input order.
-        let nz = r as usize;
-        let local: Vec<(Vec<u64>, Vec<usize>)> = self
-            .located
-            .par_chunks(SORT_CHUNK)
-            .enumerate()
-            .map(|(ci, chunk)| {
-                let mut start = vec![0usize; nz + 1];
-                for (c, _) in chunk {
-                    start[c.z as usize + 1] += 1;
-                }
-                for z in 0..nz {
-                    start[z + 1] += start[z];
-                }
-                let mut next = start.clone();
-                let mut keys = vec![0u64; chunk.len()];
-                for (k, (c, _)) in chunk.iter().enumerate() {
-                    let i = (ci * SORT_CHUNK + k) as u64;
-                    let z = c.z as usize;
-                    keys[next[z]] = (u64::from(c.y) << 54) | (u64::from(c.x) << 44) | i;
-                    next[z] += 1;
-                }
-                (keys, start)
-            })
-            .collect();
-        self.start.clear();
-        self.start.resize(nz + 1, 0);
-        for z in 0..nz {
-            let count: usize = local.iter().map(|(_, st)| st[z + 1] - st[z]).sum();
-            self.start[z + 1] = self.start[z] + count;
-        }
-        self.order.clear();
-        self.order.resize(self.located.len(), 0);
-        let mut buckets: Vec<&mut [u64]> = Vec::with_capacity(nz);
-        let mut rest = &mut self.order[..];
-        for z in 0..nz {
-            let (head, tail) = rest.split_at_mut(self.start[z + 1] - self.start[z]);
-            buckets.push(head);
-            rest = tail;
-        }
-        let sort = pack && !src.ordered;
-        buckets.into_par_iter().enumerate().for_each(|(z, bucket)| {
-            let mut at = 0;
-            for (keys, st) in &local {
-                let piece = &keys[st[z]..st[z + 1]];
-                bucket[at..at + piece.len()].copy_from_slice(piece);
-                at += piece.len();
-            }
-            if sort {
-                bucket.sort_unstable();
-            }
-        });
-        if !pack {
-            return;
-        }
+        self.sort_by_row(src, geom, level);
         let inv_h2 = 1.0 / (h * h).max(f32::MIN_POSITIVE);
-        let located = &self.located;
         let restriction = src.finer_vertices.is_some();
-        self.order
+        self.by_row
             .par_iter()
-            .map(|&k| {
-                let i = (k & ((1 << 44) - 1)) as usize;
-                let (cell, f) = located[i];
+            .map(|&Located { cell, f, index }| {
+                let i = index as usize;
                 let g = if restriction {
                     (src.positions[i] - geom.origin) / h - cell.as_vec3()
                 } else {
@@ -361,7 +360,7 @@ impl Workspace {
                 PSource {
                     f,
                     g,
-                    cell,
+                    cell_x: cell.x,
                     intensity: src.intensity[i],
                     normal: src.normals.map_or(Vec3::ZERO, |n| n[i]),
                     mass: src.mass.map_or(1.0, |m| m[i]),
@@ -369,95 +368,277 @@ impl Workspace {
                 }
             })
             .collect_into_vec(&mut self.src);
+        self.cut_bands();
     }
 
-    /// The contiguous range of prepared sources that can reach vertex layer `vz`.
-    fn layer_sources(&self, vz: u32) -> std::ops::Range<usize> {
-        self.start[vz.saturating_sub(1) as usize]..self.start[(vz + 1).min(self.r) as usize]
+    /// Stable counting sort of the sources by cell row (z, then y) at `level`, in parallel,
+    /// locating each source on the way (its cell and in-cell fraction). Every chunk of
+    /// sources locates itself and buckets itself by z (keeping input order); then every z
+    /// bucket counts its chunks' pieces by y and scatters them, in chunk order, to its rows.
+    /// Fills `by_row`, `z_start` and `row_start`.
+    fn sort_by_row(&mut self, src: &Sources, geom: &GridGeometry, level: u32) {
+        let h = geom.cell_size(level);
+        let r = geom.cells_per_axis(level);
+        self.r = r;
+        let n = src.positions.len();
+        let locate_one = |i: usize| match src.finer_vertices {
+            None => locate(src.positions[i], geom.origin, h, r),
+            Some(v) => locate_finer_vertex(v[i], r),
+        };
+        let r = r as usize;
+        let local: Vec<(Vec<Located>, Vec<usize>)> = (0..n.div_ceil(SORT_CHUNK))
+            .into_par_iter()
+            .map(|ci| {
+                let range = ci * SORT_CHUNK..((ci + 1) * SORT_CHUNK).min(n);
+                let located: Vec<Located> = range
+                    .map(|i| {
+                        let (cell, f) = locate_one(i);
+                        Located {
+                            cell,
+                            f,
+                            index: i as u32,
+                        }
+                    })
+                    .collect();
+                let mut start = vec![0usize; r + 1];
+                for l in &located {
+                    start[l.cell.z as usize + 1] += 1;
+                }
+                for z in 0..r {
+                    start[z + 1] += start[z];
+                }
+                let mut next = start.clone();
+                let mut bucketed = vec![Located::default(); located.len()];
+                for l in located {
+                    let z = l.cell.z as usize;
+                    bucketed[next[z]] = l;
+                    next[z] += 1;
+                }
+                (bucketed, start)
+            })
+            .collect();
+        self.z_start.clear();
+        self.z_start.resize(r + 1, 0);
+        for z in 0..r {
+            let count: usize = local.iter().map(|(_, st)| st[z + 1] - st[z]).sum();
+            self.z_start[z + 1] = self.z_start[z] + count;
+        }
+        self.by_row.clear();
+        self.by_row.resize(n, Located::default());
+        self.row_start.clear();
+        self.row_start.resize(r * r + 1, 0);
+        self.row_start[r * r] = n;
+        let z_start = &self.z_start;
+        split_buckets(&mut self.by_row, z_start)
+            .into_par_iter()
+            .zip(self.row_start[..r * r].par_chunks_mut(r))
+            .enumerate()
+            .for_each(|(z, (sorted, rows))| {
+                let pieces = || local.iter().flat_map(|(b, st)| &b[st[z]..st[z + 1]]);
+                let mut next = vec![0usize; r + 1];
+                for l in pieces() {
+                    next[l.cell.y as usize + 1] += 1;
+                }
+                for y in 0..r {
+                    next[y + 1] += next[y];
+                }
+                for (y, row) in rows.iter_mut().enumerate() {
+                    *row = z_start[z] + next[y];
+                }
+                for l in pieces() {
+                    let y = l.cell.y as usize;
+                    sorted[next[y]] = *l;
+                    next[y] += 1;
+                }
+            });
     }
 }
 
-/// Calls `visit(index_in_layer, weight, local_offset)` for each non-zero contribution of
-/// prepared source `ps` to vertex layer `vz` (at most 4: the source's cell layer is vz - 1 or
-/// vz).
-#[inline(always)]
-fn contributions(ps: &PSource, vz: u32, side: usize, mut visit: impl FnMut(usize, f32, Vec3)) {
-    let dz = vz.wrapping_sub(ps.cell.z);
-    if dz > 1 {
-        return;
+/// `v` cut into the consecutive buckets `z_start[z]..z_start[z + 1]`.
+fn split_buckets<'a, T>(mut rest: &'a mut [T], z_start: &[usize]) -> Vec<&'a mut [T]> {
+    let mut out = Vec::with_capacity(z_start.len() - 1);
+    for w in z_start.windows(2) {
+        let (head, tail) = rest.split_at_mut(w[1] - w[0]);
+        out.push(head);
+        rest = tail;
     }
-    let f = ps.f;
-    let g = ps.g;
-    let wz = if dz == 1 { f.z } else { 1.0 - f.z };
-    if wz <= 0.0 {
-        return;
+    out
+}
+
+impl Workspace {
+    /// The prepared sources of cell row (`y`, `z`); empty outside the grid.
+    fn cell_row(&self, y: u32, z: u32) -> &[PSource] {
+        if y >= self.r || z >= self.r {
+            return &[];
+        }
+        let k = (z * self.r + y) as usize;
+        &self.src[self.row_start[k]..self.row_start[k + 1]]
     }
-    let row = ps.cell.y as usize * side + ps.cell.x as usize;
-    let wy = [1.0 - f.y, f.y];
-    let wx = [1.0 - f.x, f.x];
-    for (dy, wy) in wy.into_iter().enumerate() {
-        for (dx, wx) in wx.into_iter().enumerate() {
-            let w = wx * wy * wz;
-            if w > 0.0 {
-                let local = g - Vec3::new(dx as f32, dy as f32, dz as f32);
-                visit(row + dy * side + dx, w, local);
+
+    /// Number of sources that can reach vertex row (`y`, `z`) through cell row `y` (the
+    /// rows y - 1 are counted with the vertex row before).
+    fn row_load(&self, y: u32, z: u32) -> usize {
+        self.cell_row(y, z).len() + z.checked_sub(1).map_or(0, |zm| self.cell_row(y, zm).len())
+    }
+
+    /// Cuts every vertex layer into bands of consecutive vertex rows of about
+    /// [`BAND_SOURCES`] source visits. The cut depends only on the data, never on the thread
+    /// pool.
+    fn cut_bands(&mut self) {
+        let mut bands = std::mem::take(&mut self.bands);
+        bands.clear();
+        for z in 0..=self.r {
+            let mut y0 = 0;
+            let mut load = 0;
+            for y in 0..=self.r {
+                let l = self.row_load(y, z);
+                if y > y0 && load + l > BAND_SOURCES {
+                    bands.push(Band { z, y0, y1: y });
+                    y0 = y;
+                    load = 0;
+                }
+                load += l;
             }
+            bands.push(Band {
+                z,
+                y0,
+                y1: self.r + 1,
+            });
+        }
+        self.bands = bands;
+    }
+
+    /// Sweeps band `b`: every source of the cell rows that reach its vertex rows adds its
+    /// non-zero trilinear contributions to a two-row rolling buffer, and every vertex row is
+    /// handed to `emit` (touched vertices in x order) once complete. A vertex receives its
+    /// contributions in a fixed order (cell row y - 1 before y, layer z - 1 before z, input
+    /// order within a row), so the sums do not depend on the thread that runs the band.
+    fn sweep(&self, b: Band, rows: &mut RowPair, mut emit: impl FnMut(u32, &mut Row)) {
+        let side = self.r as usize + 1;
+        rows.fit(side);
+        let layers = [(b.z.wrapping_sub(1), 1.0f32), (b.z, 0.0f32)];
+        for cy in b.y0.saturating_sub(1)..b.y1.min(self.r) {
+            let (low, high) = rows.split();
+            for (cz, dz) in layers {
+                for ps in self.cell_row(cy, cz) {
+                    let wz = if dz == 1.0 { ps.f.z } else { 1.0 - ps.f.z };
+                    if wz <= 0.0 {
+                        continue;
+                    }
+                    let m = Accum::moments(ps);
+                    let m = if dz == 1.0 { m.shifted(2) } else { m };
+                    // Vertex row cy (dy = 0) if it is in the band, cy + 1 (dy = 1) if it is.
+                    if cy >= b.y0 {
+                        add_row(low, ps, wz * (1.0 - ps.f.y), &m);
+                    }
+                    if cy + 1 < b.y1 {
+                        add_row(high, ps, wz * ps.f.y, &m.shifted(1));
+                    }
+                }
+            }
+            if cy >= b.y0 {
+                emit(cy, low);
+                low.clear();
+            }
+            rows.swap();
+        }
+        // The last vertex row of the grid (y = r) is complete after cell row r - 1.
+        if b.y1 == self.r + 1 {
+            let (low, _) = rows.split();
+            emit(self.r, low);
+            low.clear();
         }
     }
 }
 
-/// Task-private scratch: a dense 2-D layer of sums with generation stamps, so that a layer
-/// is reset in time proportional to what it touched. One per worker thread, kept between
-/// builds (at most 513^2 entries, about 14 MB); its contents never leak between layers, so
-/// which thread runs a layer cannot change the result.
+/// Adds source `ps` (moments `m` at the row's x = cell x vertex) to a vertex row with its
+/// y-z weight `wyz`, at both x corners.
+#[inline(always)]
+fn add_row(row: &mut Row, ps: &PSource, wyz: f32, m: &Accum) {
+    if wyz <= 0.0 {
+        return;
+    }
+    let x = ps.cell_x as usize;
+    let w0 = (1.0 - ps.f.x) * wyz;
+    if w0 > 0.0 {
+        row.at(x).add_scaled(f64::from(w0), m);
+    }
+    let w1 = ps.f.x * wyz;
+    if w1 > 0.0 {
+        row.at(x + 1).add_scaled(f64::from(w1), &m.shifted(0));
+    }
+}
+
+/// One vertex row of sums, dense in x, with the list of vertices touched so that clearing
+/// costs what was touched. At most 513 entries (about 53 KB): it stays in the L2 cache,
+/// where a dense 2-D layer would not.
 #[derive(Default)]
-struct Scratch {
-    generation: u32,
-    stamp: Vec<u32>,
+struct Row {
     acc: Vec<Accum>,
+    hit: Vec<bool>,
     touched: Vec<u32>,
 }
 
-impl Scratch {
-    fn begin(&mut self, cells: usize) {
-        if self.stamp.len() < cells {
-            self.stamp = vec![0; cells];
-            self.acc = vec![Accum::default(); cells];
-            self.generation = 0;
+impl Row {
+    #[inline(always)]
+    fn at(&mut self, x: usize) -> &mut Accum {
+        if !self.hit[x] {
+            self.hit[x] = true;
+            self.touched.push(x as u32);
         }
-        self.generation = self.generation.wrapping_add(1);
-        if self.generation == 0 {
-            self.stamp.fill(0);
-            self.generation = 1;
+        &mut self.acc[x]
+    }
+
+    /// The touched vertices in x order with their sums.
+    fn sorted(&mut self) -> impl Iterator<Item = (u32, &Accum)> {
+        self.touched.sort_unstable();
+        self.touched.iter().map(|&x| (x, &self.acc[x as usize]))
+    }
+
+    fn clear(&mut self) {
+        for &x in &self.touched {
+            self.acc[x as usize] = Accum::default();
+            self.hit[x as usize] = false;
         }
         self.touched.clear();
     }
+}
 
-    #[inline]
-    fn mark(&mut self, idx: usize) {
-        if self.stamp[idx] != self.generation {
-            self.stamp[idx] = self.generation;
-            self.touched.push(idx as u32);
+/// The rolling buffer of [`Workspace::sweep`]: the vertex rows cy and cy + 1 of the cell
+/// row being read. One per worker thread, kept between builds; it is left clear after every
+/// band, so which thread runs a band cannot change the result.
+#[derive(Default)]
+struct RowPair {
+    rows: [Row; 2],
+    low: usize,
+}
+
+impl RowPair {
+    fn fit(&mut self, side: usize) {
+        for row in &mut self.rows {
+            if row.acc.len() < side {
+                row.acc.resize(side, Accum::default());
+                row.hit.resize(side, false);
+            }
         }
     }
 
-    #[inline]
-    fn touch(&mut self, idx: usize) -> &mut Accum {
-        if self.stamp[idx] != self.generation {
-            self.stamp[idx] = self.generation;
-            self.acc[idx] = Accum::default();
-            self.touched.push(idx as u32);
-        }
-        &mut self.acc[idx]
+    fn split(&mut self) -> (&mut Row, &mut Row) {
+        let [a, b] = &mut self.rows;
+        if self.low == 0 { (a, b) } else { (b, a) }
+    }
+
+    fn swap(&mut self) {
+        self.low ^= 1;
     }
 }
 
 thread_local! {
-    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
+    static ROWS: std::cell::RefCell<RowPair> = std::cell::RefCell::new(RowPair::default());
 }
 
-fn with_scratch<T>(f: impl FnOnce(&mut Scratch) -> T) -> T {
-    SCRATCH.with(|s| f(&mut s.borrow_mut()))
+fn with_rows<T>(f: impl FnOnce(&mut RowPair) -> T) -> T {
+    ROWS.with(|s| f(&mut s.borrow_mut()))
 }
 
 /// Builds the grid lights of `level` from `src` into `out` (see the module docs), using
@@ -469,80 +650,27 @@ pub fn splat_into(
     level: u32,
     out: &mut Level,
 ) {
-    ws.prepare(src, geom, level, true);
+    ws.prepare(src, geom, level);
     let ws = &*ws;
-    let side = ws.r as usize + 1;
-    let layers: Vec<Level> = (0..=ws.r)
-        .into_par_iter()
-        .map(|vz| {
-            let range = ws.layer_sources(vz);
+    let parts: Vec<Level> = ws
+        .bands
+        .par_iter()
+        .map(|&b| {
             let mut part = Level::default();
-            if range.len() <= CHUNK {
-                with_scratch(|scratch| {
-                    accumulate(scratch, &ws.src[range], vz, side);
-                    for &idx in &scratch.touched {
-                        part.push(
-                            vertex_of(idx, side, vz),
-                            &scratch.acc[idx as usize],
-                            geom,
-                            level,
-                        );
+            with_rows(|rows| {
+                ws.sweep(b, rows, |y, row| {
+                    for (x, a) in row.sorted() {
+                        part.push(UVec3::new(x, y, b.z), a, geom, level);
                     }
                 });
-                return part;
-            }
-            // A crowded layer (coarse levels): chunks in parallel, partial sums added in chunk
-            // order (stable sort keeps equal vertices in chunk order).
-            let mut sums: Vec<(u32, Accum)> = ws.src[range]
-                .par_chunks(CHUNK)
-                .map(|chunk| {
-                    with_scratch(|scratch| {
-                        accumulate(scratch, chunk, vz, side);
-                        scratch
-                            .touched
-                            .iter()
-                            .map(|&i| (i, scratch.acc[i as usize]))
-                            .collect::<Vec<_>>()
-                    })
-                })
-                .flatten_iter()
-                .collect();
-            sums.sort_by_key(|(idx, _)| *idx);
-            let mut i = 0;
-            while i < sums.len() {
-                let (idx, mut sum) = sums[i];
-                let mut j = i + 1;
-                while j < sums.len() && sums[j].0 == idx {
-                    sum.merge(&sums[j].1);
-                    j += 1;
-                }
-                part.push(vertex_of(idx, side, vz), &sum, geom, level);
-                i = j;
-            }
+            });
             part
         })
         .collect();
     out.clear();
-    for l in layers {
-        out.append(l);
+    for p in parts {
+        out.append(p);
     }
-}
-
-/// Adds the contributions of `sources` to vertex layer `vz` into a fresh scratch layer and
-/// sorts its touched list.
-fn accumulate(scratch: &mut Scratch, sources: &[PSource], vz: u32, side: usize) {
-    scratch.begin(side * side);
-    for ps in sources {
-        contributions(ps, vz, side, |idx, w, local| {
-            scratch.touch(idx).add(ps, w, local);
-        });
-    }
-    scratch.touched.sort_unstable();
-}
-
-#[inline]
-fn vertex_of(idx: u32, side: usize, vz: u32) -> UVec3 {
-    UVec3::new(idx % side as u32, idx / side as u32, vz)
 }
 
 /// Builds the grid lights of `level` from `src` with fresh working memory.
@@ -554,30 +682,51 @@ pub fn splat(src: &Sources, geom: &GridGeometry, level: u32) -> Level {
 }
 
 /// Number of vertices of `level` that receive a non-zero weight from `src` (the length of
-/// [`splat`]'s result, before compaction), without computing them: one task per vertex layer
-/// marks the touched vertices in its scratch. Used to choose the number of levels.
+/// [`splat`]'s result, before compaction), without computing their grid lights: after the
+/// same sort, one task per vertex layer marks the vertices it touches in a bit set of the
+/// layer (33 KB at 512 cells per axis: it stays in the L1 cache), with the same weight
+/// products as the splat, so the same weights are zero. Used to choose the number of levels.
 pub fn count_vertices(ws: &mut Workspace, src: &Sources, geom: &GridGeometry, level: u32) -> usize {
-    ws.prepare(src, geom, level, false);
+    ws.sort_by_row(src, geom, level);
     let ws = &*ws;
-    let side = ws.r as usize + 1;
-    (0..=ws.r)
+    let r = ws.r;
+    let side = r as usize + 1;
+    (0..=r)
         .into_par_iter()
         .map(|vz| {
-            with_scratch(|scratch| {
-                scratch.begin(side * side);
-                for &k in &ws.order[ws.layer_sources(vz)] {
-                    let (cell, f) = ws.located[(k & ((1 << 44) - 1)) as usize];
-                    let ps = PSource {
-                        f,
-                        cell,
-                        ..PSource::default()
-                    };
-                    contributions(&ps, vz, side, |idx, _, _| scratch.mark(idx));
+            with_bits(|bits| {
+                bits.clear();
+                bits.resize((side * side).div_ceil(64), 0);
+                let from = ws.z_start[vz.saturating_sub(1) as usize];
+                let to = ws.z_start[(vz + 1).min(r) as usize];
+                for &Located { cell: c, f, .. } in &ws.by_row[from..to] {
+                    let wz = if c.z == vz { 1.0 - f.z } else { f.z };
+                    if wz <= 0.0 {
+                        continue;
+                    }
+                    // The same products as the sweep's, so that the same weights are zero.
+                    for (dy, wy) in [1.0 - f.y, f.y].into_iter().enumerate() {
+                        let wyz = wz * wy;
+                        for (dx, wx) in [1.0 - f.x, f.x].into_iter().enumerate() {
+                            if wyz > 0.0 && wx * wyz > 0.0 {
+                                let k = (c.y as usize + dy) * side + c.x as usize + dx;
+                                bits[k / 64] |= 1 << (k % 64);
+                            }
+                        }
+                    }
                 }
-                scratch.touched.len()
+                bits.iter().map(|b| b.count_ones() as usize).sum::<usize>()
             })
         })
         .sum()
+}
+
+thread_local! {
+    static BITS: std::cell::RefCell<Vec<u64>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+fn with_bits<T>(f: impl FnOnce(&mut Vec<u64>) -> T) -> T {
+    BITS.with(|s| f(&mut s.borrow_mut()))
 }
 
 /// Finishes accumulated sums into a level (shared with the reference builder).
@@ -591,4 +740,53 @@ pub(crate) fn level_from_sums(
         out.push(v, &a, geom, level);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    /// The vertex count agrees with the splat, for positions and for the vertices of a
+    /// finer grid (restriction), whose fractions are exactly 0, 1/2 or 1: the zero weights
+    /// must not count.
+    #[test]
+    fn count_vertices_matches_the_splat() {
+        let mut rng = Rng::new(&[7, 11]);
+        let (lo, hi) = (Vec3::ZERO, Vec3::splat(4.0));
+        let mut ws = Workspace::default();
+        let positions: Vec<Vec3> = (0..3000)
+            .map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0)
+            .collect();
+        let intensity = vec![Vec3::ONE; positions.len()];
+        for l_max in 1..=6 {
+            let geom = GridGeometry::new(lo, hi, l_max);
+            let fine = 2 * geom.cells_per_axis(1);
+            let vertices: Vec<UVec3> = (0..positions.len())
+                .map(|_| {
+                    UVec3::new(
+                        rng.next_u32() % (fine + 1),
+                        rng.next_u32() % (fine + 1),
+                        rng.next_u32() % 3,
+                    )
+                })
+                .collect();
+            let src = Sources {
+                positions: &positions,
+                intensity: &intensity,
+                normals: None,
+                mass: None,
+                variance: None,
+                finer_vertices: None,
+            };
+            let restriction = Sources {
+                finer_vertices: Some(&vertices),
+                ..src
+            };
+            for s in [src, restriction] {
+                let n = count_vertices(&mut ws, &s, &geom, 1);
+                assert_eq!(n, splat(&s, &geom, 1).len(), "l_max {l_max}");
+            }
+        }
+    }
 }
