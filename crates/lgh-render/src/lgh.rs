@@ -49,7 +49,7 @@ use crate::gbuffer::GBuffer;
 use crate::interleave::BlurParams;
 use crate::light_batch::{LANES, LightBatch, PackedLight};
 use crate::ratio::{
-    ReservoirLayout, ShadowReservoirs, ShadowSample, ShadowSettings, halves, offer,
+    ReservoirLayout, ShadowReservoirs, ShadowSample, ShadowSettings, halves, offer, shade_in_bands,
     shadowed_indirect,
 };
 use crate::tiles::InterleavedBins;
@@ -313,7 +313,7 @@ impl ShadeLights {
     ) {
         let w = g.width as usize;
         let layout = reservoirs.layout();
-        reservoirs.rows_mut(w).enumerate().for_each(|(y, row)| {
+        reservoirs.rows_mut().for_each(|(y, row)| {
             for x in 0..w {
                 let i = y * w + x;
                 if !g.is_hit(i) {
@@ -627,11 +627,9 @@ pub fn render_lgh(
     let eps2 = eps * eps;
     let representative = settings.shadow_target == ShadowTarget::Representative;
     let packed = lights.packed(scale);
-    let w = g.width as usize;
     // Per pixel: A and overdraw; and k reservoirs.
     let mut shaded: Vec<(Vec3, u32)> = vec![(Vec3::ZERO, 0); n_px];
-    let mut reservoirs = ShadowReservoirs::new(n_px, k);
-    let layout = reservoirs.layout();
+    let layout = ReservoirLayout::new(k);
     let ctx = RowContext {
         g,
         bins: &bins,
@@ -645,24 +643,29 @@ pub fn render_lgh(
         seed,
         phases: n as usize,
     };
-    shaded
-        .par_chunks_mut(w)
-        .zip(reservoirs.rows_mut(w))
-        .enumerate()
-        .for_each_init(
-            || vec![LightBatch::default(); ctx.phases],
-            |batches, (y, (row, row_res))| shade_row(&ctx, y, row, row_res, batches),
-        );
+    let resolve = |r: &mut ShadowReservoirs| lights.resolve_representatives(r, g, seed, eps2);
+    let (estimates, times) = shade_in_bands(
+        world,
+        g,
+        k,
+        seed,
+        &mut shaded,
+        || vec![LightBatch::default(); ctx.phases],
+        |batches, y, row, row_res| shade_row(&ctx, y, row, row_res, batches),
+        (representative && settings.jitter == JitterAt::Ray)
+            .then_some(&resolve as &(dyn Fn(&mut ShadowReservoirs) + Sync)),
+    );
     out.overdraw = shaded.iter().map(|p| p.1).collect();
     t.push(
         "lighting",
-        lighting_ms + lighting_start.elapsed().as_secs_f64() * 1e3,
+        lighting_ms
+            + (lighting_start.elapsed().as_secs_f64() * 1e3 - times.resolve_ms - times.rays_ms),
     );
-
-    if representative && settings.jitter == JitterAt::Ray {
-        t.time("shadow_targets", || {
-            lights.resolve_representatives(&mut reservoirs, g, seed, eps2);
-        });
+    if times.resolve_ms > 0.0 {
+        t.push("shadow_targets", times.resolve_ms);
+    }
+    if k > 0 {
+        t.push("shadow_rays", times.rays_ms);
     }
     let a: Vec<Vec3> = shaded.iter().map(|p| p.0).collect();
     let shadow = ShadowSettings {
@@ -670,7 +673,7 @@ pub fn render_lgh(
         interleave_blur: (n > 1).then_some(settings.blur),
         seed,
     };
-    let shadowed = shadowed_indirect(world, g, a, &reservoirs, &shadow, &mut t);
+    let shadowed = shadowed_indirect(world, g, a, estimates, &shadow, &mut t);
     (out.indirect, out.unshadowed, out.ratio, out.shadow_rays) = (
         shadowed.indirect,
         shadowed.unshadowed,

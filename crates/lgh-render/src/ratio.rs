@@ -9,6 +9,11 @@
 //! are averaged over k, filtered by the same edge-avoiding a-trous filter, and
 //! indirect = albedo / pi x A x D(S) / D(U) per channel, A being the analytic unshadowed sum
 //! (ratio 1 where D(U) is zero).
+//!
+//! The image is shaded in bands of rows ([`shade_in_bands`]): a band's reservoirs are filled,
+//! its shadow rays traced, and the same buffer serves the next band. Reservoir memory is thus
+//! k samples a pixel of one band (32 MB) instead of the whole image (250 MB at 1280x720 and
+//! k = 4; 2.2 GB at 3840x2160), and its pages are mapped once, not per frame.
 
 use std::f32::consts::FRAC_1_PI;
 
@@ -44,28 +49,43 @@ pub struct ShadowSample {
     pub light: u32,
 }
 
-/// k reservoirs per pixel in one flat buffer (memory fixed at k samples a pixel).
+/// k reservoirs per pixel for a band of image rows, in one flat buffer (memory fixed at k
+/// samples a pixel of the band). Pixels and rows are addressed by their image index.
 #[derive(Clone, Debug)]
 pub struct ShadowReservoirs {
     k: usize,
     slots: usize,
+    width: usize,
+    first_row: usize,
     data: Vec<Reservoir<ShadowSample>>,
 }
 
 impl ShadowReservoirs {
-    /// Empty reservoirs, `k` per pixel for `n_px` pixels.
+    /// Empty reservoirs, `k` per pixel, for image rows `rows` of `width` pixels.
     #[must_use]
-    pub fn new(n_px: usize, k: usize) -> Self {
-        // At least one slot a pixel so that row chunks line up when k = 0.
-        let slots = k.max(1);
-        // Filled in parallel: at 1280x720 and k = 4 this is 250 MB of fresh memory, whose
-        // page faults cost about 100 ms on one thread.
-        let mut data = Vec::new();
-        (0..n_px * slots)
-            .into_par_iter()
-            .map(|_| Reservoir::new())
-            .collect_into_vec(&mut data);
-        Self { k, slots, data }
+    pub fn new(width: usize, rows: std::ops::Range<usize>, k: usize) -> Self {
+        let mut r = Self {
+            // At least one slot a pixel so that row chunks line up when k = 0.
+            k,
+            slots: k.max(1),
+            width,
+            first_row: 0,
+            data: Vec::new(),
+        };
+        r.reset(rows);
+        r
+    }
+
+    /// Empties the reservoirs and moves them to image rows `rows`, reusing the buffer (its
+    /// pages are already mapped: fresh memory costs a page fault per 4 KB).
+    pub fn reset(&mut self, rows: std::ops::Range<usize>) {
+        self.first_row = rows.start;
+        let len = rows.len() * self.width * self.slots;
+        self.data.truncate(len);
+        self.data.par_iter_mut().for_each(|r| *r = Reservoir::new());
+        let fresh = len - self.data.len();
+        self.data
+            .par_extend((0..fresh).into_par_iter().map(|_| Reservoir::new()));
     }
 
     /// Shadow samples per pixel.
@@ -74,13 +94,23 @@ impl ShadowReservoirs {
         self.k
     }
 
-    /// Mutable rows of `width` pixels, for a parallel shading loop; see
+    /// Image rows held.
+    #[must_use]
+    pub fn rows(&self) -> std::ops::Range<usize> {
+        let n = self.data.len() / (self.width * self.slots).max(1);
+        self.first_row..self.first_row + n
+    }
+
+    /// The held rows, mutable and in parallel, each with its image row index; see
     /// [`ReservoirLayout::pixel_mut`].
     pub fn rows_mut(
         &mut self,
-        width: usize,
-    ) -> rayon::slice::ChunksMut<'_, Reservoir<ShadowSample>> {
-        self.data.par_chunks_mut(width * self.slots)
+    ) -> impl IndexedParallelIterator<Item = (usize, &mut [Reservoir<ShadowSample>])> {
+        let first = self.first_row;
+        self.data
+            .par_chunks_mut(self.width * self.slots)
+            .enumerate()
+            .map(move |(r, row)| (first + r, row))
     }
 
     /// Where a pixel's reservoirs lie in a row from [`ShadowReservoirs::rows_mut`].
@@ -98,11 +128,12 @@ impl ShadowReservoirs {
         self.slots
     }
 
-    /// The k reservoirs of pixel `i`.
+    /// The k reservoirs of image pixel `i` (in the held rows).
     #[inline]
     #[must_use]
     pub fn pixel(&self, i: usize) -> &[Reservoir<ShadowSample>] {
-        &self.data[i * self.slots..i * self.slots + self.k]
+        let at = (i - self.first_row * self.width) * self.slots;
+        &self.data[at..at + self.k]
     }
 }
 
@@ -114,6 +145,12 @@ pub struct ReservoirLayout {
 }
 
 impl ReservoirLayout {
+    /// The layout of `k` samples a pixel (at least one slot).
+    #[must_use]
+    pub fn new(k: usize) -> Self {
+        Self { k, slots: k.max(1) }
+    }
+
     /// The k reservoirs of pixel `x` of a row from [`ShadowReservoirs::rows_mut`].
     #[inline]
     #[must_use]
@@ -182,26 +219,189 @@ pub fn composite(g: &GBuffer, a: &[Vec3], ratio: &[Vec3]) -> Vec<Vec3> {
         .collect()
 }
 
-/// Recombines the unshadowed sum `a` if interleaved (timing `interleave_blur`), traces the
-/// shadow rays, filters and composites: the indirect radiance albedo / pi x A x D(S) / D(U),
-/// A, the ratio and the number of rays. Timings `shadow_rays`, `shadow_filter` and
-/// `composite` go to `t` too.
+/// The per-pixel shadow estimates of the ratio estimator: S = mean of V U_k and U = mean of
+/// U_k over the k samples (zero without samples), and the number of rays traced.
+#[derive(Clone, Debug, Default)]
+pub struct ShadowEstimates {
+    /// Samples per pixel.
+    pub k: usize,
+    /// S per pixel.
+    pub s: Vec<Vec3>,
+    /// U per pixel.
+    pub u: Vec<Vec3>,
+    /// Shadow rays traced.
+    pub rays: u64,
+}
+
+/// Wall times of [`shade_in_bands`], summed over the bands, in milliseconds.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BandTimes {
+    /// The shading of the rows (reservoir selection included).
+    pub shade_ms: f64,
+    /// The `resolve` step.
+    pub resolve_ms: f64,
+    /// The shadow rays.
+    pub rays_ms: f64,
+}
+
+/// Image rows per band: reservoirs of about [`BAND_BYTES`] (at least 8 rows).
+fn default_band_rows(width: usize, slots: usize) -> usize {
+    let per_row = width * slots * std::mem::size_of::<Reservoir<ShadowSample>>();
+    (BAND_BYTES / per_row.max(1)).max(8)
+}
+
+/// Memory of the reservoirs of one band: 32 MB, 92 rows at 1280 pixels and k = 4, instead
+/// of 250 MB for the whole image.
+pub const BAND_BYTES: usize = 32 << 20;
+
+/// Runs the shading pass and the shadow rays band of rows by band of rows, so that the k
+/// reservoirs a pixel holds (LGH Appendix A) need memory for one band only, reused band
+/// after band. Per band: every row is shaded in parallel by `shade(state, y, row of P, row of
+/// reservoirs)` (`state` from `init`, per task), `resolve` (if any) finishes the selected
+/// samples, and one shadow ray per sample gives the pixel's S and U. Pixels and random
+/// streams are indexed by image position, so the result does not depend on the band size.
+#[allow(clippy::too_many_arguments)]
+pub fn shade_in_bands<P: Send, St>(
+    world: &World,
+    g: &GBuffer,
+    k: usize,
+    seed: u64,
+    shaded: &mut [P],
+    init: impl Fn() -> St + Sync + Send,
+    shade: impl Fn(&mut St, usize, &mut [P], &mut [Reservoir<ShadowSample>]) + Sync + Send,
+    resolve: Option<&(dyn Fn(&mut ShadowReservoirs) + Sync)>,
+) -> (ShadowEstimates, BandTimes) {
+    shade_in_bands_of(None, world, g, k, seed, shaded, init, shade, resolve)
+}
+
+/// [`shade_in_bands`] with `band_rows` rows per band (`None`: the default).
+#[allow(clippy::too_many_arguments)]
+fn shade_in_bands_of<P: Send, St>(
+    band_rows: Option<usize>,
+    world: &World,
+    g: &GBuffer,
+    k: usize,
+    seed: u64,
+    shaded: &mut [P],
+    init: impl Fn() -> St + Sync + Send,
+    shade: impl Fn(&mut St, usize, &mut [P], &mut [Reservoir<ShadowSample>]) + Sync + Send,
+    resolve: Option<&(dyn Fn(&mut ShadowReservoirs) + Sync)>,
+) -> (ShadowEstimates, BandTimes) {
+    let (w, h) = (g.width as usize, g.height as usize);
+    let n_px = g.len();
+    let mut est = ShadowEstimates {
+        k,
+        s: vec![Vec3::ZERO; if k > 0 { n_px } else { 0 }],
+        u: vec![Vec3::ZERO; if k > 0 { n_px } else { 0 }],
+        rays: 0,
+    };
+    let mut times = BandTimes::default();
+    let rows = band_rows.unwrap_or_else(|| default_band_rows(w, k.max(1)));
+    let mut reservoirs = ShadowReservoirs::new(w, 0..0, k);
+    for y0 in (0..h).step_by(rows) {
+        let band = y0..(y0 + rows).min(h);
+        let px = band.start * w..band.end * w;
+        let start = std::time::Instant::now();
+        reservoirs.reset(band.clone());
+        shaded[px.clone()]
+            .par_chunks_mut(w)
+            .zip(reservoirs.rows_mut())
+            .for_each_init(&init, |state, (row, (y, row_res))| {
+                shade(state, y, row, row_res);
+            });
+        times.shade_ms += start.elapsed().as_secs_f64() * 1e3;
+        if k == 0 {
+            continue;
+        }
+        if let Some(resolve) = resolve {
+            let start = std::time::Instant::now();
+            resolve(&mut reservoirs);
+            times.resolve_ms += start.elapsed().as_secs_f64() * 1e3;
+        }
+        let start = std::time::Instant::now();
+        est.rays += trace_band(
+            world,
+            g,
+            &reservoirs,
+            seed,
+            px.start,
+            &mut est.s[px.clone()],
+            &mut est.u[px],
+        );
+        times.rays_ms += start.elapsed().as_secs_f64() * 1e3;
+    }
+    (est, times)
+}
+
+/// One shadow ray per held sample of the pixels `first..first + s.len()`: writes their S and
+/// U and returns the number of rays.
+fn trace_band(
+    world: &World,
+    g: &GBuffer,
+    reservoirs: &ShadowReservoirs,
+    seed: u64,
+    first: usize,
+    s_out: &mut [Vec3],
+    u_out: &mut [Vec3],
+) -> u64 {
+    let k = reservoirs.k();
+    s_out
+        .par_iter_mut()
+        .zip(u_out.par_iter_mut())
+        .enumerate()
+        .map(|(j, (s_px, u_px))| {
+            let i = first + j;
+            if !g.is_hit(i) {
+                return 0;
+            }
+            let (xp, ng) = (g.position[i], g.geo_normal[i]);
+            let (mut s, mut u) = (Vec3::ZERO, Vec3::ZERO);
+            let mut rng = Rng::new(&[seed, i as u64, STREAM_JITTER]);
+            let mut rays = 0;
+            for r in reservoirs.pixel(i) {
+                let Some(sample) = r.sample else { continue };
+                rays += 1;
+                let u_k = sample.f * (r.total / r.weight);
+                let q = if sample.jitter == Vec3::ZERO {
+                    sample.q
+                } else {
+                    let t = Vec3::new(
+                        raised_cosine(halves(rng.next_u32())),
+                        raised_cosine(halves(rng.next_u32())),
+                        raised_cosine(halves(rng.next_u32())),
+                    );
+                    sample.q + t * sample.jitter
+                };
+                let visible = !world.occluded_between(xp, ng, q, sample.n.normalize_or_zero());
+                u += u_k;
+                if visible {
+                    s += u_k;
+                }
+            }
+            (*s_px, *u_px) = (s / k as f32, u / k as f32);
+            rays
+        })
+        .sum()
+}
+
+/// Recombines the unshadowed sum `a` if interleaved (timing `interleave_blur`), filters the
+/// shadow estimates and composites: the indirect radiance albedo / pi x A x D(S) / D(U), A,
+/// the ratio and the number of rays. Timings `shadow_filter` and `composite` go to `t` too.
 #[must_use]
 pub fn shadowed_indirect(
     world: &World,
     g: &GBuffer,
     a: Vec<Vec3>,
-    reservoirs: &ShadowReservoirs,
+    estimates: ShadowEstimates,
     settings: &ShadowSettings,
     t: &mut Timings,
 ) -> Shadowed {
     let n_px = g.len();
-    let k = reservoirs.k();
     let a = match &settings.interleave_blur {
         Some(p) => t.time("interleave_blur", || interleave::recombine(&a, g, p)),
         None => a,
     };
-    if k == 0 {
+    if estimates.k == 0 {
         let ratio = vec![Vec3::ONE; n_px];
         let indirect = t.time("composite", || composite(g, &a, &ratio));
         return Shadowed {
@@ -211,48 +411,12 @@ pub fn shadowed_indirect(
             rays: 0,
         };
     }
-    let (s_hat, u_hat): (Vec<Vec3>, Vec<Vec3>) = t.time("shadow_rays", || {
-        (0..n_px)
-            .into_par_iter()
-            .map(|i| {
-                if !g.is_hit(i) {
-                    return (Vec3::ZERO, Vec3::ZERO);
-                }
-                let (xp, ng) = (g.position[i], g.geo_normal[i]);
-                let (mut s, mut u) = (Vec3::ZERO, Vec3::ZERO);
-                let mut rng = Rng::new(&[settings.seed, i as u64, STREAM_JITTER]);
-                for r in reservoirs.pixel(i) {
-                    let Some(sample) = r.sample else { continue };
-                    let u_k = sample.f * (r.total / r.weight);
-                    let q = if sample.jitter == Vec3::ZERO {
-                        sample.q
-                    } else {
-                        let t = Vec3::new(
-                            raised_cosine(halves(rng.next_u32())),
-                            raised_cosine(halves(rng.next_u32())),
-                            raised_cosine(halves(rng.next_u32())),
-                        );
-                        sample.q + t * sample.jitter
-                    };
-                    let visible = !world.occluded_between(xp, ng, q, sample.n.normalize_or_zero());
-                    u += u_k;
-                    if visible {
-                        s += u_k;
-                    }
-                }
-                (s / k as f32, u / k as f32)
-            })
-            .unzip()
-    });
-    let rays = (0..n_px)
-        .map(|i| {
-            reservoirs
-                .pixel(i)
-                .iter()
-                .filter(|r| r.sample.is_some())
-                .count() as u64
-        })
-        .sum();
+    let ShadowEstimates {
+        s: s_hat,
+        u: u_hat,
+        rays,
+        ..
+    } = estimates;
     let (s_f, u_f) = t.time("shadow_filter", || {
         let (s_hat, u_hat) = match &settings.interleave_blur {
             Some(p) => (
@@ -286,5 +450,78 @@ pub fn shadowed_indirect(
         unshadowed: a,
         ratio,
         rays,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Shading in bands of 3 rows gives what one band for the whole image gives: the same
+    /// shaded values, shadow estimates and ray count (pixels and random streams are indexed
+    /// by image position), with occluded samples among them.
+    #[test]
+    fn bands_do_not_change_the_result() {
+        let world = World::new(lgh_scene::cornell::cornell_box());
+        let (w, h) = (40u32, 30u32);
+        let g = GBuffer::render(&world, &world.scene.camera().frame(w, h), w, h);
+        // Candidate lights spread through the box (some hidden behind the blocks).
+        let lights: Vec<Vec3> = (0..7)
+            .map(|j| {
+                let t = j as f32 / 7.0;
+                Vec3::new(
+                    0.1 + 0.8 * t,
+                    0.05 + 0.9 * (1.0 - t),
+                    0.1 + 0.8 * (t * 3.0).fract(),
+                ) * world.radius
+                    + world.centre
+                    - Vec3::splat(0.5 * world.radius)
+            })
+            .collect();
+        let shade =
+            |_: &mut (), y: usize, row: &mut [Vec3], res: &mut [Reservoir<ShadowSample>]| {
+                let layout = ReservoirLayout::new(3);
+                for (x, a) in row.iter_mut().enumerate() {
+                    let i = y * w as usize + x;
+                    if !g.is_hit(i) {
+                        continue;
+                    }
+                    let mut rng = Rng::new(&[9, i as u64]);
+                    let slots = layout.pixel_mut(res, x);
+                    for (j, &q) in lights.iter().enumerate() {
+                        let f = Vec3::splat(1.0 + j as f32)
+                            / (1.0 + (q - g.position[i]).length_squared());
+                        *a += f;
+                        let sample = ShadowSample {
+                            q,
+                            f,
+                            light: j as u32,
+                            ..ShadowSample::default()
+                        };
+                        offer(slots, sample, f.x, &mut rng);
+                    }
+                }
+            };
+        let run = |rows: Option<usize>| {
+            let mut shaded = vec![Vec3::ZERO; g.len()];
+            let (est, _) =
+                shade_in_bands_of(rows, &world, &g, 3, 5, &mut shaded, || (), shade, None);
+            (shaded, est)
+        };
+        let (a1, one) = run(Some(h as usize));
+        let (a3, three) = run(Some(3));
+        assert_eq!(a1, a3);
+        assert_eq!(
+            (one.s, one.u, one.rays),
+            (three.s.clone(), three.u.clone(), three.rays)
+        );
+        assert!(three.rays > 0);
+        let occluded = three
+            .s
+            .iter()
+            .zip(&three.u)
+            .filter(|(s, u)| s.x < u.x)
+            .count();
+        assert!(occluded > 0, "some samples are shadowed");
     }
 }

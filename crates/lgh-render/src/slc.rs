@@ -22,8 +22,6 @@
 //! same k-sample ratio estimator as LGH ([`crate::ratio`]), with each light offered with its
 //! stochastic contribution as weight.
 
-use std::time::Instant;
-
 use glam::Vec3;
 use lgh_core::color::luminance;
 use lgh_core::light_range::{alpha_point, clamped_range, light_xi, stochastic_range};
@@ -36,7 +34,9 @@ use crate::frame::Timings;
 use crate::gbuffer::GBuffer;
 use crate::interleave::BlurParams;
 use crate::ism::{IsmSettings, PointCloud, ShadowMaps};
-use crate::ratio::{ShadowReservoirs, ShadowSample, ShadowSettings, offer, shadowed_indirect};
+use crate::ratio::{
+    ReservoirLayout, ShadowSample, ShadowSettings, offer, shade_in_bands, shadowed_indirect,
+};
 use crate::tiles::InterleavedBins;
 use crate::world::World;
 
@@ -216,14 +216,15 @@ pub fn render_slc(
     // Step 3: shading.
     let w = g.width as usize;
     let mut shaded: Vec<(Vec3, u32)> = vec![(Vec3::ZERO, 0); n_px];
-    let mut reservoirs = ShadowReservoirs::new(n_px, k);
-    let layout = reservoirs.layout();
-    let start = Instant::now();
-    shaded
-        .par_chunks_mut(w)
-        .zip(reservoirs.rows_mut(w))
-        .enumerate()
-        .for_each(|(y, (row, row_res))| {
+    let layout = ReservoirLayout::new(k);
+    let (estimates, times) = shade_in_bands(
+        world,
+        g,
+        k,
+        seed,
+        &mut shaded,
+        || (),
+        |(), y, row, row_res| {
             for (x, px) in row.iter_mut().enumerate() {
                 let i = y * w + x;
                 if !g.is_hit(i) {
@@ -265,8 +266,13 @@ pub fn render_slc(
                     }
                 }
             }
-        });
-    t.push("shading", start.elapsed().as_secs_f64() * 1e3);
+        },
+        None,
+    );
+    t.push("shading", times.shade_ms);
+    if k > 0 {
+        t.push("shadow_rays", times.rays_ms);
+    }
     let lights_per_pixel = shaded.iter().map(|p| p.1).collect();
     let a: Vec<Vec3> = shaded.into_iter().map(|p| p.0).collect();
     let shadow = ShadowSettings {
@@ -274,7 +280,7 @@ pub fn render_slc(
         interleave_blur: (n > 1).then_some(settings.blur),
         seed,
     };
-    let shadowed = shadowed_indirect(world, g, a, &reservoirs, &shadow, &mut t);
+    let shadowed = shadowed_indirect(world, g, a, estimates, &shadow, &mut t);
     SlcOutput {
         indirect: shadowed.indirect,
         unshadowed: shadowed.unshadowed,
