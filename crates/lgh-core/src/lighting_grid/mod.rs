@@ -365,34 +365,39 @@ fn bounds(lights: &InputLights) -> Result<(Vec3, Vec3), GridError> {
     if n == 0 {
         return Err(GridError::Empty);
     }
-    // One pass: bounds and the first invalid index (min is exact, so the split does not
-    // matter).
-    let (lo, hi, bad) = (0..n)
-        .into_par_iter()
-        .fold(
-            || {
-                (
-                    Vec3::splat(f32::INFINITY),
-                    Vec3::splat(f32::NEG_INFINITY),
-                    usize::MAX,
-                )
-            },
-            |(lo, hi, bad), i| {
-                let (p, c) = (lights.positions[i], lights.intensity[i]);
-                let ok = p.is_finite() && c.is_finite() && c.min_element() >= 0.0;
-                (lo.min(p), hi.max(p), if ok { bad } else { bad.min(i) })
-            },
-        )
-        .reduce(
-            || {
-                (
-                    Vec3::splat(f32::INFINITY),
-                    Vec3::splat(f32::NEG_INFINITY),
-                    usize::MAX,
-                )
-            },
-            |a, b| (a.0.min(b.0), a.1.max(b.1), a.2.min(b.2)),
-        );
+    // One pass over chunks: bounds and the first invalid index (min and max are exact, so
+    // the split does not matter). Plain loops over chunk slices vectorise.
+    const CHUNK: usize = 1 << 14;
+    let empty = (
+        Vec3::splat(f32::INFINITY),
+        Vec3::splat(f32::NEG_INFINITY),
+        usize::MAX,
+    );
+    let (lo, hi, bad) = lights
+        .positions
+        .par_chunks(CHUNK)
+        .zip(lights.intensity.par_chunks(CHUNK))
+        .enumerate()
+        .map(|(ci, (ps, cs))| {
+            let (mut lo, mut hi) = (empty.0, empty.1);
+            let mut ok = true;
+            for (&p, &c) in ps.iter().zip(cs) {
+                lo = lo.min(p);
+                hi = hi.max(p);
+                ok &= p.is_finite() & c.is_finite() & (c.min_element() >= 0.0);
+            }
+            let bad = if ok {
+                usize::MAX
+            } else {
+                let first = ps
+                    .iter()
+                    .zip(cs)
+                    .position(|(p, c)| !(p.is_finite() && c.is_finite() && c.min_element() >= 0.0));
+                first.map_or(usize::MAX, |k| ci * CHUNK + k)
+            };
+            (lo, hi, bad)
+        })
+        .reduce(|| empty, |a, b| (a.0.min(b.0), a.1.max(b.1), a.2.min(b.2)));
     if bad != usize::MAX {
         return Err(GridError::InvalidLight { index: bad });
     }
