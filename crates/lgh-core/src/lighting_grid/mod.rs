@@ -253,9 +253,10 @@ impl GridBuilder {
 
     /// The paper's rule (section 4.3): the largest l_max with |S_1| < N/2 (at least 1).
     /// |S_1| grows with l_max, so the search starts from a guess (for lights on surfaces
-    /// |S_1| grows about 4x per level), builds S_1 there (into `levels[0]`), and counts the
-    /// neighbouring candidates without building them ([`splat::count_vertices`]); S_1 is
-    /// rebuilt only if the guess was wrong. The build of the final S_1 is reported as `S1`,
+    /// |S_1| grows about 4x per level) and counts |S_1| there and at its neighbours without
+    /// building it ([`splat::count_vertices`]), then builds the S_1 of the level kept (into
+    /// `levels[0]`). When that is the last level counted (the guess, or a level below it),
+    /// the build reuses the count's sort. The build of the final S_1 is reported as `S1`,
     /// everything else as `level_count`.
     fn auto_levels(
         &mut self,
@@ -267,62 +268,57 @@ impl GridBuilder {
         let n = lights.positions.len();
         let src = lights.sources();
         let start = Instant::now();
-        // Time of the build of the guessed S_1, if it is the one kept.
-        let mut kept_ms = None;
-        let build = |ws: &mut splat::Workspace, out: &mut Level, l: u32| {
-            let g = GridGeometry::new(lo, hi, l);
-            let s = Instant::now();
-            splat::splat_into(ws, &src, &g, 1, out);
-            s.elapsed().as_secs_f64() * 1e3
-        };
         let fits = |len: usize| 2 * len < n;
+        let count = |ws: &mut splat::Workspace, l: u32| {
+            splat::count_vertices(ws, &src, &GridGeometry::new(lo, hi, l), 1)
+        };
+        // The S_1 build when it comes right after the count of its level (sort reused).
+        let mut built: Option<(u32, f64)> = None;
         let chosen = if n < 2 || (hi - lo).max_element() <= 0.0 {
             1
         } else {
             let guess =
                 ((1.0 + (n as f64 / 8.0).max(1.0).log(4.0).floor()) as u32).clamp(1, MAX_LEVELS);
-            let s1_ms = build(&mut self.ws, &mut self.levels[0], guess);
             let mut l = guess;
-            if guess == 1 || fits(self.levels[0].len()) {
-                while l < MAX_LEVELS
-                    && fits(splat::count_vertices(
-                        &mut self.ws,
-                        &src,
-                        &GridGeometry::new(lo, hi, l + 1),
-                        1,
-                    ))
-                {
+            if guess == 1 || fits(count(&mut self.ws, guess)) {
+                // Usually the answer: build it now, while the count's sort is at hand.
+                built = Some((guess, self.build_counted_s1(&src, lo, hi, guess)));
+                while l < MAX_LEVELS && fits(count(&mut self.ws, l + 1)) {
                     l += 1;
                 }
             } else {
                 while l > 1 {
                     l -= 1;
-                    if l == 1
-                        || fits(splat::count_vertices(
-                            &mut self.ws,
-                            &src,
-                            &GridGeometry::new(lo, hi, l),
-                            1,
-                        ))
-                    {
+                    if fits(count(&mut self.ws, l)) {
+                        built = Some((l, self.build_counted_s1(&src, lo, hi, l)));
                         break;
                     }
                 }
             }
-            if l == guess {
-                kept_ms = Some(s1_ms);
-            }
             l
         };
         let geometry = GridGeometry::new(lo, hi, chosen);
-        let s1_ms = match kept_ms {
-            Some(ms) => ms,
-            None => build(&mut self.ws, &mut self.levels[0], chosen),
+        let s1_ms = match built {
+            Some((l, ms)) if l == chosen => ms,
+            _ => {
+                let s = Instant::now();
+                splat::splat_into(&mut self.ws, &src, &geometry, 1, &mut self.levels[0]);
+                s.elapsed().as_secs_f64() * 1e3
+            }
         };
         let total = start.elapsed().as_secs_f64() * 1e3;
         t.push("level_count", (total - s1_ms).max(0.0));
         t.push("S1", s1_ms);
         geometry
+    }
+
+    /// Builds the S_1 of `l_max` levels into `levels[0]` right after counting it (reusing
+    /// the count's sort); returns its time in ms.
+    fn build_counted_s1(&mut self, src: &Sources, lo: Vec3, hi: Vec3, l_max: u32) -> f64 {
+        let s = Instant::now();
+        let g = GridGeometry::new(lo, hi, l_max);
+        splat::splat_counted_into(&mut self.ws, src, &g, 1, &mut self.levels[0]);
+        s.elapsed().as_secs_f64() * 1e3
     }
 
     /// The last hierarchy built (empty before the first build).

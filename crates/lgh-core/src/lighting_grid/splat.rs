@@ -5,19 +5,21 @@
 //! scatter with atomics; here it is organised so that no two tasks ever write the same memory,
 //! without atomics or locks:
 //!
-//! 1. every source gets its cell and in-cell fraction f (parallel map);
-//! 2. sources are bucketed by cell z with a stable counting sort; unordered inputs (S_0) are
-//!    also sorted by (cell y, cell x) inside each bucket for memory locality (S_1 lights come
-//!    out of their own build in vertex order already), and their attributes are packed in
-//!    that order;
-//! 3. vertex layer v_z receives from the sources of cell layers v_z - 1 and v_z, which are one
-//!    contiguous range; the range is cut into chunks of [`CHUNK`] sources, and each
-//!    (layer, chunk) task sums its contributions in a private dense 2-D scratch grid;
-//! 4. each layer adds its chunks' partial sums in chunk order, and layers are concatenated in
-//!    z order, each in (y, x) order.
+//! 1. every source gets its cell and in-cell fraction f, and the sources are sorted by cell
+//!    row (z, then y) with a stable two-pass counting sort (input order is kept within a
+//!    row); their attributes are then packed in that order;
+//! 2. vertex row (v_y, v_z) receives from the sources of the four cell rows
+//!    (v_y - 1 or v_y, v_z - 1 or v_z). Each vertex layer is cut into bands of consecutive
+//!    vertex rows holding about [`BAND_SOURCES`] sources; a band task reads its cell rows in
+//!    order and sums their contributions in a rolling pair of dense vertex rows (kept in the
+//!    L2 cache), emitting each vertex row in x order once it is complete;
+//! 3. bands are concatenated in (z, y) order, so the level comes out in vertex order.
 //!
-//! The chunk boundaries are fixed by the data, not by the thread pool, so the result does not
-//! depend on the number of threads. Positions are accumulated relative to the receiving
+//! A vertex's contributions arrive in an order fixed by the data (cell row y - 1 before y,
+//! layer z - 1 before z, input order within a row), and the bands are cut by the data, not by
+//! the thread pool, so the result does not depend on the number of threads. Each source's
+//! moments are computed once per layer and shifted exactly to each corner. Positions are
+//! accumulated relative to the receiving
 //! vertex, in cell units and in double precision, which keeps the variance Q/W - (P/W)^2
 //! free of cancellation far from the origin and the sums of coarse levels exact to ~1e-12.
 
@@ -319,6 +321,8 @@ pub struct Workspace {
     src: Vec<PSource>,
     z_start: Vec<usize>,
     row_start: Vec<usize>,
+    /// The grid, level and source count of the last sort.
+    sorted: Option<(GridGeometry, u32, usize)>,
     bands: Vec<Band>,
     r: u32,
 }
@@ -344,8 +348,14 @@ impl Workspace {
     /// Locates the sources, sorts them by cell row (stable: input order within a row), packs
     /// their attributes in that order, and cuts the vertex layers into bands.
     fn prepare(&mut self, src: &Sources, geom: &GridGeometry, level: u32) {
-        let h = geom.cell_size(level);
         self.sort_by_row(src, geom, level);
+        self.pack(src, geom, level);
+    }
+
+    /// Packs the attributes of the sources in the order of the last sort (which must have
+    /// been of `src` at `level` of `geom`), then cuts the vertex layers into bands.
+    fn pack(&mut self, src: &Sources, geom: &GridGeometry, level: u32) {
+        let h = geom.cell_size(level);
         let inv_h2 = 1.0 / (h * h).max(f32::MIN_POSITIVE);
         let restriction = src.finer_vertices.is_some();
         self.by_row
@@ -381,6 +391,7 @@ impl Workspace {
         let r = geom.cells_per_axis(level);
         self.r = r;
         let n = src.positions.len();
+        self.sorted = Some((*geom, level, n));
         let locate_one = |i: usize| match src.finer_vertices {
             None => locate(src.positions[i], geom.origin, h, r),
             Some(v) => locate_finer_vertex(v[i], r),
@@ -651,7 +662,28 @@ pub fn splat_into(
     out: &mut Level,
 ) {
     ws.prepare(src, geom, level);
-    let ws = &*ws;
+    sweep_into(ws, geom, level, out);
+}
+
+/// [`splat_into`] right after [`count_vertices`] of the same `src` at the same `level` of the
+/// same `geom`: the count's sort is reused, only the attributes are packed. (The number of
+/// levels is chosen by counting; the level kept is then built without sorting again.)
+pub(crate) fn splat_counted_into(
+    ws: &mut Workspace,
+    src: &Sources,
+    geom: &GridGeometry,
+    level: u32,
+    out: &mut Level,
+) {
+    if ws.sorted != Some((*geom, level, src.positions.len())) {
+        ws.sort_by_row(src, geom, level);
+    }
+    ws.pack(src, geom, level);
+    sweep_into(ws, geom, level, out);
+}
+
+/// Sweeps the bands of a prepared workspace into `out`.
+fn sweep_into(ws: &Workspace, geom: &GridGeometry, level: u32, out: &mut Level) {
     let parts: Vec<Level> = ws
         .bands
         .par_iter()
