@@ -60,12 +60,7 @@ pub fn representatives(
     let keys: Vec<AtomicU64> = (0..grid.len() * SLOTS)
         .map(|_| AtomicU64::new(u64::MAX))
         .collect();
-    // Vertices as integers in (z, y, x) order, for fast lookups.
-    let vkeys: Vec<u64> = grid.vertex.par_iter().map(|&v| vertex_key(v)).collect();
-    let grid = Lookup {
-        grid,
-        vkeys: &vkeys,
-    };
+    let grid = Lookup::new(grid);
     // S_1 from the input lights.
     lights
         .positions
@@ -118,23 +113,57 @@ pub fn representatives(
     keys.into_iter().map(|k| unpack(k.into_inner())).collect()
 }
 
-/// A grid with its vertices as sortable integers.
+/// A grid with, per level, where each vertex row (y, z) starts among the level's lights
+/// (which are in (z, y, x) order): a vertex is found by one table read and a search within
+/// its row (a few entries), instead of a binary search over the whole level, whose cache
+/// misses dominated the draw.
 struct Lookup<'a> {
     grid: &'a LightingGrid,
-    vkeys: &'a [u64],
+    /// Per level l (index l - 1): `(r + 1)^2 + 1` row starts, absolute light indices.
+    rows: Vec<Vec<u32>>,
 }
 
-impl Lookup<'_> {
+impl<'a> Lookup<'a> {
+    fn new(grid: &'a LightingGrid) -> Self {
+        let rows = (1..=grid.l_max())
+            .into_par_iter()
+            .map(|l| {
+                let side = grid.geometry.cells_per_axis(l) as usize + 1;
+                let range = grid.level_range(l);
+                let mut start = vec![0u32; side * side + 1];
+                for v in &grid.vertex[range.clone()] {
+                    start[v.z as usize * side + v.y as usize + 1] += 1;
+                }
+                // Prefix sums: row k is then start[k]..start[k + 1].
+                let mut at = range.start as u32;
+                for s in &mut start {
+                    at += *s;
+                    *s = at;
+                }
+                start
+            })
+            .collect();
+        Self { grid, rows }
+    }
+
     /// Cell and in-cell fraction of point `p` at level `l`.
     fn locate(&self, l: u32, p: Vec3) -> (UVec3, Vec3) {
         let geom = self.grid.geometry;
         locate(p, geom.origin, geom.cell_size(l), geom.cells_per_axis(l))
     }
-}
 
-/// Vertex v as an integer ordered like (z, y, x) (coordinates are below 2^21).
-fn vertex_key(v: UVec3) -> u64 {
-    (u64::from(v.z) << 42) | (u64::from(v.y) << 21) | u64::from(v.x)
+    /// Index of the light at vertex `v` of level `l`, if it has one.
+    #[inline]
+    fn find(&self, l: u32, v: UVec3) -> Option<usize> {
+        let side = self.grid.geometry.cells_per_axis(l) as usize + 1;
+        let rows = &self.rows[l as usize - 1];
+        let row = v.z as usize * side + v.y as usize;
+        let (a, b) = (rows[row] as usize, rows[row + 1] as usize);
+        self.grid.vertex[a..b]
+            .binary_search_by_key(&v.x, |u| u.x)
+            .ok()
+            .map(|k| a + k)
+    }
 }
 
 /// The representative packed in a key (its low 32 bits), or [`NONE`].
@@ -159,19 +188,15 @@ fn offer(
     if lum <= 0.0 {
         return;
     }
-    let range = lookup.grid.level_range(l);
-    let vertices = &lookup.vkeys[range.clone()];
     for corner in 0..8u32 {
         let d = UVec3::new(corner & 1, (corner >> 1) & 1, corner >> 2);
         let w = corner_weight(f, d) * lum;
         if w <= 0.0 {
             continue;
         }
-        let v = c + d;
-        let Ok(k) = vertices.binary_search(&vertex_key(v)) else {
+        let Some(j) = lookup.find(l, c + d) else {
             continue;
         };
-        let j = range.start + k;
         // One hash per (source, vertex) and 4 slots: 16 random bits for each.
         let base = hash(&[seed, u64::from(l), id, u64::from(corner)]);
         let mut bits = base;
@@ -185,14 +210,27 @@ fn offer(
                 bits = hash(&[base, s as u64]);
             }
             let u = (((bits >> (16 * (s % 4))) & 0xffff) as f32 + 1.0) * (1.0 / 65_536.0);
+            // Most offers lose: read before the (costlier) atomic update, and skip the
+            // logarithm when a lower bound of the key already loses: -`ln`(u) >= 1 - u -
+            // LN_MARGIN for every u drawn here (tested), so the computed key is above the
+            // bound below, strictly; a skipped offer would have lost to the current key, and
+            // keys only decrease, so the minimum stays order-independent.
+            let current = slot.load(Ordering::Relaxed);
+            let current_key = f32::from_bits((current >> 32) as u32);
+            if current != u64::MAX && (1.0 - u - LN_MARGIN) / w * 0.999_9 >= current_key {
+                continue;
+            }
             let key = (u64::from((-ln(u) / w).to_bits()) << 32) | u64::from(r);
-            // Most offers lose: read before the (costlier) atomic update.
-            if key < slot.load(Ordering::Relaxed) {
+            if key < current {
                 slot.fetch_min(key, Ordering::Relaxed);
             }
         }
     }
 }
+
+/// Margin of the lower bound -ln(u) >= 1 - u that [`offer`] uses with the approximate
+/// [`ln`].
+const LN_MARGIN: f32 = 1e-3;
 
 /// ln(u) for u in (0, 1], to about 3e-4 absolute: the exponent bits plus a polynomial for the
 /// mantissa (keys need no more, and libm's ln dominated the cost of the draw).
@@ -315,6 +353,19 @@ mod tests {
                 u.ln()
             );
             u += 1.0 / 4096.0;
+        }
+    }
+
+    /// The bound that lets `offer` skip the logarithm holds for every u it draws.
+    #[test]
+    fn the_key_bound_holds_for_every_draw() {
+        for k in 0..65_536u32 {
+            let u = (k as f32 + 1.0) * (1.0 / 65_536.0);
+            assert!(
+                -ln(u) >= 1.0 - u - super::LN_MARGIN + 1e-5,
+                "{u}: {}",
+                -ln(u)
+            );
         }
     }
 
