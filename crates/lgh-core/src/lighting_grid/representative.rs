@@ -61,24 +61,35 @@ pub fn representatives(
         .map(|_| AtomicU64::new(u64::MAX))
         .collect();
     let grid = Lookup::new(grid);
-    // S_1 from the input lights.
-    lights
+    // S_1 from the input lights, visited in cell-row order so that the vertices and slots
+    // they update are near each other in memory (the result does not depend on the order).
+    let r1 = grid.grid.geometry.cells_per_axis(1) as u64;
+    let mut order: Vec<(u64, u32)> = lights
         .positions
         .par_iter()
-        .zip(lights.intensity.par_iter())
         .enumerate()
-        .for_each(|(i, (&p, &intensity))| {
-            offer(
-                &grid,
-                &keys,
-                1,
-                grid.locate(1, p),
-                luminance(intensity),
-                seed,
-                i as u64,
-                |_| i as u32,
-            );
-        });
+        .map(|(i, &p)| {
+            let (c, _) = grid.locate(1, p);
+            (
+                (u64::from(c.z) * r1 + u64::from(c.y)) * r1 + u64::from(c.x),
+                i as u32,
+            )
+        })
+        .collect();
+    order.par_sort_unstable();
+    order.par_iter().for_each(|&(_, i)| {
+        let i = i as usize;
+        offer(
+            &grid,
+            &keys,
+            1,
+            grid.locate(1, lights.positions[i]),
+            luminance(lights.intensity[i]),
+            seed,
+            i as u64,
+            |_| i as u32,
+        );
+    });
     let reps_of = |level: u32| -> (std::ops::Range<usize>, Vec<u32>) {
         let range = grid.grid.level_range(level);
         let reps = keys[SLOTS * range.start..SLOTS * range.end]
