@@ -49,7 +49,7 @@ use crate::gbuffer::GBuffer;
 use crate::interleave::BlurParams;
 use crate::light_batch::{LANES, LightBatch, PackedLight};
 use crate::ratio::{
-    ReservoirLayout, ShadowReservoirs, ShadowSample, ShadowSettings, halves, offer, shade_in_bands,
+    ReservoirLayout, ShadowPass, ShadowReservoirs, ShadowSample, ShadowSettings, halves, offer,
     shadowed_indirect,
 };
 use crate::tiles::InterleavedBins;
@@ -644,11 +644,7 @@ pub fn render_lgh(
         phases: n as usize,
     };
     let resolve = |r: &mut ShadowReservoirs| lights.resolve_representatives(r, g, seed, eps2);
-    let (estimates, times) = shade_in_bands(
-        world,
-        g,
-        k,
-        seed,
+    let (estimates, times) = ShadowPass::new(world, g, k, seed).shade_in_bands(
         &mut shaded,
         || vec![LightBatch::default(); ctx.phases],
         |batches, y, row, row_res| shade_row(&ctx, y, row, row_res, batches),

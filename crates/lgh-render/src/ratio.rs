@@ -10,10 +10,11 @@
 //! indirect = albedo / pi x A x D(S) / D(U) per channel, A being the analytic unshadowed sum
 //! (ratio 1 where D(U) is zero).
 //!
-//! The image is shaded in bands of rows ([`shade_in_bands`]): a band's reservoirs are filled,
-//! its shadow rays traced, and the same buffer serves the next band. Reservoir memory is thus
-//! k samples a pixel of one band (32 MB) instead of the whole image (250 MB at 1280x720 and
-//! k = 4; 2.2 GB at 3840x2160), and its pages are mapped once, not per frame.
+//! The image is shaded in bands of rows ([`ShadowPass::shade_in_bands`]): a band's
+//! reservoirs are filled, its shadow rays traced, and the same buffer serves the next band.
+//! Reservoir memory is thus k samples a pixel of one band (32 MB) instead of the whole image
+//! (250 MB at 1280x720 and k = 4; 2.2 GB at 3840x2160), and only that much fresh memory is
+//! mapped (page-faulted) per frame.
 
 use std::f32::consts::FRAC_1_PI;
 
@@ -233,7 +234,7 @@ pub struct ShadowEstimates {
     pub rays: u64,
 }
 
-/// Wall times of [`shade_in_bands`], summed over the bands, in milliseconds.
+/// Wall times of [`ShadowPass::shade_in_bands`], summed over the bands, in milliseconds.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct BandTimes {
     /// The shading of the rows (reservoir selection included).
@@ -254,83 +255,101 @@ fn default_band_rows(width: usize, slots: usize) -> usize {
 /// of 250 MB for the whole image.
 pub const BAND_BYTES: usize = 32 << 20;
 
-/// Runs the shading pass and the shadow rays band of rows by band of rows, so that the k
-/// reservoirs a pixel holds (LGH Appendix A) need memory for one band only, reused band
-/// after band. Per band: every row is shaded in parallel by `shade(state, y, row of P, row of
-/// reservoirs)` (`state` from `init`, per task), `resolve` (if any) finishes the selected
-/// samples, and one shadow ray per sample gives the pixel's S and U. Pixels and random
-/// streams are indexed by image position, so the result does not depend on the band size.
-#[allow(clippy::too_many_arguments)]
-pub fn shade_in_bands<P: Send, St>(
-    world: &World,
-    g: &GBuffer,
-    k: usize,
-    seed: u64,
-    shaded: &mut [P],
-    init: impl Fn() -> St + Sync + Send,
-    shade: impl Fn(&mut St, usize, &mut [P], &mut [Reservoir<ShadowSample>]) + Sync + Send,
-    resolve: Option<&(dyn Fn(&mut ShadowReservoirs) + Sync)>,
-) -> (ShadowEstimates, BandTimes) {
-    shade_in_bands_of(None, world, g, k, seed, shaded, init, shade, resolve)
+/// The fixed inputs of the banded shading and shadow passes
+/// ([`ShadowPass::shade_in_bands`]).
+#[derive(Clone, Copy)]
+pub struct ShadowPass<'a> {
+    /// Scene (for the shadow rays).
+    pub world: &'a World,
+    /// G-buffer of the frame.
+    pub g: &'a GBuffer,
+    /// Shadow samples per pixel (0: no rays).
+    pub k: usize,
+    /// Seed of the ray-time jitter.
+    pub seed: u64,
+    /// Image rows per band; `None`: reservoirs of about [`BAND_BYTES`].
+    pub band_rows: Option<usize>,
 }
 
-/// [`shade_in_bands`] with `band_rows` rows per band (`None`: the default).
-#[allow(clippy::too_many_arguments)]
-fn shade_in_bands_of<P: Send, St>(
-    band_rows: Option<usize>,
-    world: &World,
-    g: &GBuffer,
-    k: usize,
-    seed: u64,
-    shaded: &mut [P],
-    init: impl Fn() -> St + Sync + Send,
-    shade: impl Fn(&mut St, usize, &mut [P], &mut [Reservoir<ShadowSample>]) + Sync + Send,
-    resolve: Option<&(dyn Fn(&mut ShadowReservoirs) + Sync)>,
-) -> (ShadowEstimates, BandTimes) {
-    let (w, h) = (g.width as usize, g.height as usize);
-    let n_px = g.len();
-    let mut est = ShadowEstimates {
-        k,
-        s: vec![Vec3::ZERO; if k > 0 { n_px } else { 0 }],
-        u: vec![Vec3::ZERO; if k > 0 { n_px } else { 0 }],
-        rays: 0,
-    };
-    let mut times = BandTimes::default();
-    let rows = band_rows.unwrap_or_else(|| default_band_rows(w, k.max(1)));
-    let mut reservoirs = ShadowReservoirs::new(w, 0..0, k);
-    for y0 in (0..h).step_by(rows) {
-        let band = y0..(y0 + rows).min(h);
-        let px = band.start * w..band.end * w;
-        let start = std::time::Instant::now();
-        reservoirs.reset(band.clone());
-        shaded[px.clone()]
-            .par_chunks_mut(w)
-            .zip(reservoirs.rows_mut())
-            .for_each_init(&init, |state, (row, (y, row_res))| {
-                shade(state, y, row, row_res);
-            });
-        times.shade_ms += start.elapsed().as_secs_f64() * 1e3;
-        if k == 0 {
-            continue;
-        }
-        if let Some(resolve) = resolve {
-            let start = std::time::Instant::now();
-            resolve(&mut reservoirs);
-            times.resolve_ms += start.elapsed().as_secs_f64() * 1e3;
-        }
-        let start = std::time::Instant::now();
-        est.rays += trace_band(
+impl<'a> ShadowPass<'a> {
+    /// The passes for `k` samples a pixel, with the default band size.
+    #[must_use]
+    pub fn new(world: &'a World, g: &'a GBuffer, k: usize, seed: u64) -> Self {
+        Self {
             world,
             g,
-            &reservoirs,
+            k,
             seed,
-            px.start,
-            &mut est.s[px.clone()],
-            &mut est.u[px],
-        );
-        times.rays_ms += start.elapsed().as_secs_f64() * 1e3;
+            band_rows: None,
+        }
     }
-    (est, times)
+
+    /// Runs the shading pass and the shadow rays band of rows by band of rows, so that the
+    /// k reservoirs a pixel holds (LGH Appendix A) need memory for one band only, reused
+    /// band after band. Per band: every row is shaded in parallel by `shade(state, y, row of
+    /// P, row of reservoirs)` (`state` from `init`, per task), `resolve` (if any) finishes
+    /// the selected samples, and one shadow ray per sample gives the pixel's S and U. Pixels
+    /// and random streams are indexed by image position, so the result does not depend on
+    /// the band size.
+    pub fn shade_in_bands<P: Send, St>(
+        &self,
+        shaded: &mut [P],
+        init: impl Fn() -> St + Sync + Send,
+        shade: impl Fn(&mut St, usize, &mut [P], &mut [Reservoir<ShadowSample>]) + Sync + Send,
+        resolve: Option<&(dyn Fn(&mut ShadowReservoirs) + Sync)>,
+    ) -> (ShadowEstimates, BandTimes) {
+        let Self {
+            world,
+            g,
+            k,
+            seed,
+            band_rows,
+        } = *self;
+        let (w, h) = (g.width as usize, g.height as usize);
+        let n_px = g.len();
+        let mut est = ShadowEstimates {
+            k,
+            s: vec![Vec3::ZERO; if k > 0 { n_px } else { 0 }],
+            u: vec![Vec3::ZERO; if k > 0 { n_px } else { 0 }],
+            rays: 0,
+        };
+        let mut times = BandTimes::default();
+        let rows = band_rows.unwrap_or_else(|| default_band_rows(w, k.max(1)));
+        let mut reservoirs = ShadowReservoirs::new(w, 0..0, k);
+        for y0 in (0..h).step_by(rows) {
+            let band = y0..(y0 + rows).min(h);
+            let px = band.start * w..band.end * w;
+            let start = std::time::Instant::now();
+            reservoirs.reset(band.clone());
+            shaded[px.clone()]
+                .par_chunks_mut(w)
+                .zip(reservoirs.rows_mut())
+                .for_each_init(&init, |state, (row, (y, row_res))| {
+                    shade(state, y, row, row_res);
+                });
+            times.shade_ms += start.elapsed().as_secs_f64() * 1e3;
+            if k == 0 {
+                continue;
+            }
+            if let Some(resolve) = resolve {
+                let start = std::time::Instant::now();
+                resolve(&mut reservoirs);
+                times.resolve_ms += start.elapsed().as_secs_f64() * 1e3;
+            }
+            let start = std::time::Instant::now();
+            est.rays += trace_band(
+                world,
+                g,
+                &reservoirs,
+                seed,
+                px.start,
+                &mut est.s[px.clone()],
+                &mut est.u[px],
+            );
+            times.rays_ms += start.elapsed().as_secs_f64() * 1e3;
+        }
+        (est, times)
+    }
 }
 
 /// One shadow ray per held sample of the pixels `first..first + s.len()`: writes their S and
@@ -504,8 +523,14 @@ mod tests {
             };
         let run = |rows: Option<usize>| {
             let mut shaded = vec![Vec3::ZERO; g.len()];
-            let (est, _) =
-                shade_in_bands_of(rows, &world, &g, 3, 5, &mut shaded, || (), shade, None);
+            let pass = ShadowPass {
+                world: &world,
+                g: &g,
+                k: 3,
+                seed: 5,
+                band_rows: rows,
+            };
+            let (est, _) = pass.shade_in_bands(&mut shaded, || (), shade, None);
             (shaded, est)
         };
         let (a1, one) = run(Some(h as usize));

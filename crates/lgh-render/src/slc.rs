@@ -35,7 +35,7 @@ use crate::gbuffer::GBuffer;
 use crate::interleave::BlurParams;
 use crate::ism::{IsmSettings, PointCloud, ShadowMaps};
 use crate::ratio::{
-    ReservoirLayout, ShadowSample, ShadowSettings, offer, shade_in_bands, shadowed_indirect,
+    ReservoirLayout, ShadowPass, ShadowSample, ShadowSettings, offer, shadowed_indirect,
 };
 use crate::tiles::InterleavedBins;
 use crate::world::World;
@@ -217,11 +217,7 @@ pub fn render_slc(
     let w = g.width as usize;
     let mut shaded: Vec<(Vec3, u32)> = vec![(Vec3::ZERO, 0); n_px];
     let layout = ReservoirLayout::new(k);
-    let (estimates, times) = shade_in_bands(
-        world,
-        g,
-        k,
-        seed,
+    let (estimates, times) = ShadowPass::new(world, g, k, seed).shade_in_bands(
         &mut shaded,
         || (),
         |(), y, row, row_res| {
