@@ -122,8 +122,9 @@ pub struct RenderArgs {
     /// crosses the room in 2 s) or builtin:emitter-room (2688 emissive triangles, for the pt
     /// methods).
     pub scene: Option<PathBuf>,
-    /// How the indirect light is computed.
-    #[arg(long, value_enum, default_value = "brute")]
+    /// How the indirect light is computed (default: the lighting grid hierarchy; `brute` is
+    /// the exact reference, slow).
+    #[arg(long, value_enum, default_value = "lgh")]
     pub method: MethodArg,
     /// Number of virtual point lights (VPLs) to generate by light tracing.
     #[arg(long, default_value_t = 10_000)]
