@@ -22,6 +22,7 @@ use crate::image::Image;
 use crate::lgh::{LghSettings, render_lgh};
 use crate::progress::Progress;
 use crate::pt::{LightSampling, PtSettings, render_pt};
+use crate::ratio::ShadowRatio;
 use crate::slc::{RangeMode, SlcSettings, render_slc};
 use crate::vpl_gen::{VplSet, generate_vpls};
 use crate::world::World;
@@ -168,8 +169,8 @@ pub struct Frame {
     pub camera: CameraFrame,
     /// `lgh` and `slc`: the unshadowed sum A per pixel (before albedo / pi).
     pub unshadowed: Option<Vec<Vec3>>,
-    /// `lgh` and `slc`: the filtered shadow ratio per pixel (1 without shadows).
-    pub shadow_ratio: Option<Vec<Vec3>>,
+    /// `lgh` and `slc`: the shadow ratio per pixel, filtered and raw (1 without shadows).
+    pub shadow_ratio: Option<ShadowRatio>,
 }
 
 /// The output image of `component` from a frame's parts.

@@ -49,8 +49,8 @@ use crate::gbuffer::GBuffer;
 use crate::interleave::BlurParams;
 use crate::light_batch::{LANES, LightBatch, PackedLight};
 use crate::ratio::{
-    ReservoirLayout, ShadowPass, ShadowReservoirs, ShadowSample, ShadowSettings, halves, offer,
-    shadowed_indirect,
+    ReservoirLayout, ShadowPass, ShadowRatio, ShadowReservoirs, ShadowSample, ShadowSettings,
+    halves, offer, shadowed_indirect,
 };
 use crate::tiles::InterleavedBins;
 use crate::world::World;
@@ -162,8 +162,8 @@ pub struct LghOutput {
     pub indirect: Vec<Vec3>,
     /// The unshadowed sum A per pixel (without albedo / pi; recombined if interleaved).
     pub unshadowed: Vec<Vec3>,
-    /// The filtered shadow ratio per pixel (1 without shadows).
-    pub ratio: Vec<Vec3>,
+    /// The shadow ratio per pixel, filtered and raw (1 without shadows).
+    pub ratio: ShadowRatio,
     /// Per-pixel overdraw: lights whose sphere covers the pixel.
     pub overdraw: Vec<u32>,
     /// Grid lights in the hierarchy (all levels).

@@ -206,10 +206,46 @@ pub struct Shadowed {
     pub indirect: Vec<Vec3>,
     /// The unshadowed sum A, recombined if interleaved.
     pub unshadowed: Vec<Vec3>,
-    /// The filtered shadow ratio D(S) / D(U) per pixel and channel (1 without shadows).
-    pub ratio: Vec<Vec3>,
+    /// The shadow ratio, filtered and raw.
+    pub ratio: ShadowRatio,
     /// Shadow rays traced.
     pub rays: u64,
+}
+
+/// The shadow ratio per pixel and channel (1 where nothing is shadowed or sampled).
+#[derive(Clone, Debug, Default)]
+pub struct ShadowRatio {
+    /// D(S) / D(U): the ratio of the filtered estimates, used for compositing.
+    pub filtered: Vec<Vec3>,
+    /// S / U before filtering: noisy, it shows how far the ratio may plausibly lie from the
+    /// filtered one (the temporal filter clamps its history to its neighbourhood).
+    pub raw: Vec<Vec3>,
+}
+
+impl ShadowRatio {
+    /// Ratio 1 everywhere (no shadows).
+    #[must_use]
+    pub fn unshadowed(n: usize) -> Self {
+        let ones = vec![Vec3::ONE; n];
+        Self {
+            filtered: ones.clone(),
+            raw: ones,
+        }
+    }
+}
+
+/// S / U per channel, clamped to [0, 1]; 1 where U is zero.
+fn ratio_of(s: &[Vec3], u: &[Vec3]) -> Vec<Vec3> {
+    s.iter()
+        .zip(u)
+        .map(|(&s, &u)| {
+            Vec3::select(
+                u.cmpgt(Vec3::splat(1e-20)),
+                (s / u).clamp(Vec3::ZERO, Vec3::ONE),
+                Vec3::ONE,
+            )
+        })
+        .collect()
 }
 
 /// indirect = albedo / pi x A x ratio per pixel.
@@ -421,8 +457,8 @@ pub fn shadowed_indirect(
         None => a,
     };
     if estimates.k == 0 {
-        let ratio = vec![Vec3::ONE; n_px];
-        let indirect = t.time("composite", || composite(g, &a, &ratio));
+        let ratio = ShadowRatio::unshadowed(n_px);
+        let indirect = t.time("composite", || composite(g, &a, &ratio.filtered));
         return Shadowed {
             indirect,
             unshadowed: a,
@@ -436,6 +472,7 @@ pub fn shadowed_indirect(
         rays,
         ..
     } = estimates;
+    let mut raw = Vec::new();
     let (s_f, u_f) = t.time("shadow_filter", || {
         let (s_hat, u_hat) = match &settings.interleave_blur {
             Some(p) => (
@@ -444,6 +481,7 @@ pub fn shadowed_indirect(
             ),
             None => (s_hat, u_hat),
         };
+        raw = ratio_of(&s_hat, &u_hat);
         if settings.filter_passes > 0 {
             let params = AtrousParams {
                 passes: settings.filter_passes,
@@ -454,16 +492,11 @@ pub fn shadowed_indirect(
             (s_hat, u_hat)
         }
     });
-    let ratio: Vec<Vec3> = (0..n_px)
-        .map(|i| {
-            Vec3::select(
-                u_f[i].cmpgt(Vec3::splat(1e-20)),
-                (s_f[i] / u_f[i]).clamp(Vec3::ZERO, Vec3::ONE),
-                Vec3::ONE,
-            )
-        })
-        .collect();
-    let indirect = t.time("composite", || composite(g, &a, &ratio));
+    let ratio = ShadowRatio {
+        filtered: ratio_of(&s_f, &u_f),
+        raw,
+    };
+    let indirect = t.time("composite", || composite(g, &a, &ratio.filtered));
     Shadowed {
         indirect,
         unshadowed: a,

@@ -46,12 +46,19 @@ impl Sequence {
         };
         let indirect = match (taa.target, &f.unshadowed, &f.shadow_ratio) {
             (TemporalTarget::ShadowRatio, Some(a), Some(ratio)) => {
-                let ratio = self.filter.apply(f.camera, &f.gbuffer, ratio, &taa);
+                let r = &ratio.filtered;
+                let ratio = self.filter.apply(f.camera, &f.gbuffer, r, &ratio.raw, &taa);
                 composite(&f.gbuffer, a, &ratio)
             }
-            _ => self
-                .filter
-                .apply(f.camera, &f.gbuffer, &f.indirect.pixels, &taa),
+            (TemporalTarget::Indirect, Some(a), Some(ratio)) => {
+                let raw = composite(&f.gbuffer, a, &ratio.raw);
+                let v = &f.indirect.pixels;
+                self.filter.apply(f.camera, &f.gbuffer, v, &raw, &taa)
+            }
+            _ => {
+                let v = &f.indirect.pixels;
+                self.filter.apply(f.camera, &f.gbuffer, v, v, &taa)
+            }
         };
         f.set_indirect(indirect, settings.component);
         Ok(f)

@@ -35,7 +35,8 @@ use crate::gbuffer::GBuffer;
 use crate::interleave::BlurParams;
 use crate::ism::{IsmSettings, PointCloud, ShadowMaps};
 use crate::ratio::{
-    ReservoirLayout, ShadowPass, ShadowSample, ShadowSettings, offer, shadowed_indirect,
+    ReservoirLayout, ShadowPass, ShadowRatio, ShadowSample, ShadowSettings, offer,
+    shadowed_indirect,
 };
 use crate::tiles::InterleavedBins;
 use crate::world::World;
@@ -99,8 +100,8 @@ pub struct SlcOutput {
     pub indirect: Vec<Vec3>,
     /// The unshadowed sum A per pixel (without albedo / pi; recombined if interleaved).
     pub unshadowed: Vec<Vec3>,
-    /// The filtered shadow ratio per pixel (1 without shadows).
-    pub ratio: Vec<Vec3>,
+    /// The shadow ratio per pixel, filtered and raw (1 without shadows).
+    pub ratio: ShadowRatio,
     /// Per pixel: lights evaluated (within their range) by the pixel's sub-image.
     pub lights_per_pixel: Vec<u32>,
     /// Shadow rays traced.
