@@ -256,7 +256,8 @@ impl GridBuilder {
     /// |S_1| grows about 4x per level) and counts |S_1| there and at its neighbours without
     /// building it ([`splat::count_vertices`]), then builds the S_1 of the level kept (into
     /// `levels[0]`). When that is the last level counted (the guess, or a level below it),
-    /// the build reuses the count's sort. The build of the final S_1 is reported as `S1`,
+    /// the build reuses the count's sort, and the level above the guess is counted from the
+    /// same sort ([`splat::count_vertices_finer`]). The build of the final S_1 is reported as `S1`,
     /// everything else as `level_count`.
     fn auto_levels(
         &mut self,
@@ -281,10 +282,17 @@ impl GridBuilder {
                 ((1.0 + (n as f64 / 8.0).max(1.0).log(4.0).floor()) as u32).clamp(1, MAX_LEVELS);
             let mut l = guess;
             if guess == 1 || fits(count(&mut self.ws, guess)) {
-                // Usually the answer: build it now, while the count's sort is at hand.
-                built = Some((guess, self.build_counted_s1(&src, lo, hi, guess)));
-                while l < MAX_LEVELS && fits(count(&mut self.ws, l + 1)) {
+                // The next level is usually too fine: count it from this sort while the
+                // sorted sources are still in the cache, then build the guess from it.
+                let finer = |ws: &mut splat::Workspace, l: u32| {
+                    let g = GridGeometry::new(lo, hi, l);
+                    splat::count_vertices_finer(ws, &src, &g, 1).unwrap_or_else(|| count(ws, l + 1))
+                };
+                while l < MAX_LEVELS && fits(finer(&mut self.ws, l)) {
                     l += 1;
+                }
+                if l == guess {
+                    built = Some((guess, self.build_counted_s1(&src, lo, hi, guess)));
                 }
             } else {
                 while l > 1 {

@@ -23,7 +23,7 @@
 //! vertex, in cell units and in double precision, which keeps the variance Q/W - (P/W)^2
 //! free of cancellation far from the origin and the sums of coarse levels exact to ~1e-12.
 
-use glam::{DVec3, UVec3, Vec3};
+use glam::{DVec3, UVec3, Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::geometry::GridGeometry;
@@ -722,35 +722,130 @@ pub fn count_vertices(ws: &mut Workspace, src: &Sources, geom: &GridGeometry, le
     ws.sort_by_row(src, geom, level);
     let ws = &*ws;
     let r = ws.r;
-    let side = r as usize + 1;
     (0..=r)
         .into_par_iter()
         .map(|vz| {
-            with_bits(|bits| {
-                bits.clear();
-                bits.resize((side * side).div_ceil(64), 0);
-                let from = ws.z_start[vz.saturating_sub(1) as usize];
-                let to = ws.z_start[(vz + 1).min(r) as usize];
+            let from = ws.z_start[vz.saturating_sub(1) as usize];
+            let to = ws.z_start[(vz + 1).min(r) as usize];
+            count_layer(r + 1, |layer| {
                 for &Located { cell: c, f, .. } in &ws.by_row[from..to] {
                     let wz = if c.z == vz { 1.0 - f.z } else { f.z };
-                    if wz <= 0.0 {
-                        continue;
-                    }
-                    // The same products as the sweep's, so that the same weights are zero.
-                    for (dy, wy) in [1.0 - f.y, f.y].into_iter().enumerate() {
-                        let wyz = wz * wy;
-                        for (dx, wx) in [1.0 - f.x, f.x].into_iter().enumerate() {
-                            if wyz > 0.0 && wx * wyz > 0.0 {
-                                let k = (c.y as usize + dy) * side + c.x as usize + dx;
-                                bits[k / 64] |= 1 << (k % 64);
-                            }
-                        }
-                    }
+                    layer.mark(c, f, wz);
                 }
-                bits.iter().map(|b| b.count_ones() as usize).sum::<usize>()
             })
         })
         .sum()
+}
+
+/// [`count_vertices`] of the same sources at the same `level` of the next finer geometry
+/// (l_max + 1: twice the cells per axis), from the sort that the last count or build at
+/// `level` of `geom` left in `ws`, without sorting again: `None` if `ws` holds another sort,
+/// or the sources are a restriction's.
+///
+/// A source in cell c with fraction f lies in the finer cell 2c + b with fraction 2f - b, b =
+/// [2f >= 1], per axis. Both are exact in floating point and equal to locating it on the
+/// finer grid directly (whose spacing is exactly half), so the same weights are zero. One
+/// task per coarse cell layer m marks the finer vertex layers 2m (from the sources of
+/// coarse layers m - 1 and m) and 2m + 1 (from layer m): each source is read twice, as in
+/// [`count_vertices`], and marks without branching on its finer z, which is a coin toss.
+#[must_use]
+pub fn count_vertices_finer(
+    ws: &Workspace,
+    src: &Sources,
+    geom: &GridGeometry,
+    level: u32,
+) -> Option<usize> {
+    if ws.sorted != Some((*geom, level, src.positions.len())) || src.finer_vertices.is_some() {
+        return None;
+    }
+    let r = ws.r;
+    let side = 2 * r + 1;
+    // Finer cell and fraction of x and y: t = 2f, b = [t >= 1], cell 2c + b, fraction t - b,
+    // in SSE lanes (a scalar comparison becomes a branch, mispredicted half the time).
+    let finer_xy = |c: UVec3, f: Vec3| {
+        let t = Vec4::new(f.x, f.y, 0.0, 0.0) * 2.0;
+        let upper = t.cmpge(Vec4::ONE);
+        let b = upper.bitmask();
+        let fine = t - Vec4::select(upper, Vec4::ONE, Vec4::ZERO);
+        (
+            UVec3::new(2 * c.x + (b & 1), 2 * c.y + ((b >> 1) & 1), 0),
+            Vec3::new(fine.x, fine.y, 0.0),
+        )
+    };
+    let slab = |m: u32| &ws.by_row[ws.z_start[m as usize]..ws.z_start[m as usize + 1]];
+    Some(
+        (0..=r)
+            .into_par_iter()
+            .map(|m| {
+                count_layers(side, |even, odd| {
+                    // With t = 2 f_z, a source of coarse layer m lies in the finer cell layer
+                    // 2m (t < 1, fraction t) or 2m + 1 (t >= 1, fraction t - 1), and its z
+                    // weights follow without asking which: max(0, t - 1) in finer vertex
+                    // layer 2m + 2, min(t, 2 - t) in 2m + 1, max(0, 1 - t) in 2m (the same
+                    // values as 1 - fraction and fraction, exactly).
+                    if m > 0 {
+                        for &Located { cell, f, .. } in slab(m - 1) {
+                            let (c, fxy) = finer_xy(cell, f);
+                            even.mark(c, fxy, (2.0 * f.z - 1.0).max(0.0));
+                        }
+                    }
+                    if m < r {
+                        for &Located { cell, f, .. } in slab(m) {
+                            let (c, fxy) = finer_xy(cell, f);
+                            let t = 2.0 * f.z;
+                            even.mark(c, fxy, (1.0 - t).max(0.0));
+                            odd.mark(c, fxy, t.min(2.0 - t));
+                        }
+                    }
+                })
+            })
+            .sum(),
+    )
+}
+
+/// Vertices of one layer (`side` x `side` vertices) marked by `visit` (see
+/// [`LayerBits::mark`]).
+fn count_layer(side: u32, visit: impl FnOnce(&mut LayerBits)) -> usize {
+    count_layers(side, |layer, _| visit(layer))
+}
+
+/// Vertices of two layers (`side` x `side` vertices each) marked by `visit`.
+fn count_layers(side: u32, visit: impl FnOnce(&mut LayerBits, &mut LayerBits)) -> usize {
+    with_bits(|bits| {
+        let side = side as usize;
+        let words = (side * side).div_ceil(64);
+        bits.clear();
+        bits.resize(2 * words, 0);
+        let (a, b) = bits.split_at_mut(words);
+        visit(
+            &mut LayerBits { bits: a, side },
+            &mut LayerBits { bits: b, side },
+        );
+        bits.iter().map(|b| b.count_ones() as usize).sum()
+    })
+}
+
+/// The vertices of one layer touched so far, one bit each.
+struct LayerBits<'a> {
+    bits: &'a mut [u64],
+    side: usize,
+}
+
+impl LayerBits<'_> {
+    /// Marks the layer's vertices of cell `c` (x, y) that a source with fraction `f` (x, y)
+    /// and z weight `wz` gives a non-zero weight: the same products as the sweep's, so that
+    /// the same weights are zero. Without branches: every corner's word is written.
+    #[inline]
+    fn mark(&mut self, c: UVec3, f: Vec3, wz: f32) {
+        for (dy, wy) in [1.0 - f.y, f.y].into_iter().enumerate() {
+            let wyz = wz * wy;
+            for (dx, wx) in [1.0 - f.x, f.x].into_iter().enumerate() {
+                let hit = (wyz > 0.0) & (wx * wyz > 0.0);
+                let k = (c.y as usize + dy) * self.side + c.x as usize + dx;
+                self.bits[k / 64] |= u64::from(hit) << (k % 64);
+            }
+        }
+    }
 }
 
 thread_local! {
@@ -777,6 +872,7 @@ pub(crate) fn level_from_sums(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lighting_grid::geometry::MAX_LEVELS;
     use crate::rng::Rng;
 
     /// The vertex count agrees with the splat, for positions and for the vertices of a
@@ -819,6 +915,33 @@ mod tests {
                 let n = count_vertices(&mut ws, &s, &geom, 1);
                 assert_eq!(n, splat(&s, &geom, 1).len(), "l_max {l_max}");
             }
+            // The count at l_max + 1 from this sort, against a sort at l_max + 1. Some
+            // positions on the cell boundaries of the finer grid (fractions 0 and 1/2).
+            if l_max < MAX_LEVELS {
+                let mut on_edges = positions.clone();
+                for (i, p) in on_edges.iter_mut().enumerate().take(500) {
+                    let h = geom.cell_size(1) / 2.0;
+                    let snapped = ((*p - geom.origin) / h).floor() * h + geom.origin;
+                    *p = if i % 2 == 0 {
+                        snapped
+                    } else {
+                        Vec3::new(snapped.x, p.y, snapped.z)
+                    };
+                }
+                let s = Sources {
+                    positions: &on_edges,
+                    ..src
+                };
+                let finer = GridGeometry {
+                    l_max: l_max + 1,
+                    ..geom
+                };
+                let expected = splat(&s, &finer, 1).len();
+                count_vertices(&mut ws, &s, &geom, 1);
+                assert_eq!(count_vertices_finer(&ws, &s, &geom, 1), Some(expected));
+                assert_eq!(count_vertices_finer(&ws, &s, &finer, 1), None);
+            }
         }
     }
 }
+
