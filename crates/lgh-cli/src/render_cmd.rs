@@ -211,9 +211,11 @@ pub struct RenderArgs {
     /// Default: 1 (none) for lgh, 8 for slc (the papers' settings).
     #[arg(long)]
     pub interleave: Option<u32>,
-    /// lgh, slc: screen tile edge in (sub-image) pixels for light binning.
-    #[arg(long, default_value_t = 16)]
-    pub tile: u32,
+    /// lgh, slc: screen tile edge in sub-image pixels for light binning. Default: 16 full-
+    /// resolution pixels for lgh (16 / n sub-image pixels with n x n interleaving, at least
+    /// 4), 16 sub-image pixels for slc.
+    #[arg(long)]
+    pub tile: Option<u32>,
     /// slc: shadows from imperfect shadow maps, as the paper renders them (section 4.3): a
     /// 32x32 paraboloid depth map per VPL, splatted from a point cloud after the range-based
     /// culling of its Program 1. Replaces the ray-traced shadow samples.
@@ -343,8 +345,10 @@ fn lgh_settings(args: &RenderArgs) -> Result<LghSettings> {
     {
         bail!("--interleave {n}: expected 1 to 16");
     }
-    if args.tile == 0 || args.tile > 256 {
-        bail!("--tile {}: expected 1 to 256", args.tile);
+    if let Some(t) = args.tile
+        && !(1..=256).contains(&t)
+    {
+        bail!("--tile {t}: expected 1 to 256");
     }
     if args.start_level > 1 {
         bail!("--start-level {}: expected 0 or 1", args.start_level);
@@ -390,7 +394,7 @@ fn slc_settings(args: &RenderArgs, lgh: &LghSettings, exposure: f32) -> Result<S
         error_bound: args.error_bound.unwrap_or(0.0005),
         exposure,
         interleave,
-        tile: args.tile,
+        tile: args.tile.unwrap_or(16),
         shadow_samples: lgh.shadow_samples,
         frame_seed: args.frame_seed,
         filter_passes: lgh.filter_passes,

@@ -76,8 +76,9 @@ pub struct LghSettings {
     pub start_level: u32,
     /// A-trous passes on the shadow estimates, 0 = no filter (`--filter`, `--filter-passes`).
     pub filter_passes: u32,
-    /// Screen tile size in (sub-image) pixels for light binning (`--tile`).
-    pub tile: u32,
+    /// Screen tile edge in sub-image pixels for light binning (`--tile`); `None`:
+    /// [`auto_tile`] of the interleaving.
+    pub tile: Option<u32>,
     /// n of n x n interleaved sampling, 1 = none (`--interleave`; paper 4.3: 2 or 4).
     pub interleave: u32,
     /// The discontinuity-aware blur after interleaved shading.
@@ -142,7 +143,7 @@ impl Default for LghSettings {
             shadow_from_level: 2,
             start_level: 1,
             filter_passes: 5,
-            tile: 16,
+            tile: None,
             interleave: 1,
             blur: BlurParams::defaults(),
             dev_scale: 0.5,
@@ -383,6 +384,16 @@ impl ShadeLights {
     }
 }
 
+/// The default tile edge, in sub-image pixels, for n x n interleaving: 16 full-resolution
+/// pixels (16 / n sub-image pixels, at least 4). A sub-image tile of 16 sub-image pixels
+/// spans 16 n pixels of the screen, so at n = 4 its lights cover far more than a pixel's;
+/// measured at 1280x720, 100K VPLs, k = 4 (lighting ms): n = 2, tile 8 / 16: 268 / 292;
+/// n = 4, tile 4 / 16: 130 / 150.
+#[must_use]
+pub fn auto_tile(n: u32) -> u32 {
+    (16 / n.max(1)).max(4)
+}
+
 /// What the lighting loop of one row reads.
 struct RowContext<'a> {
     g: &'a GBuffer,
@@ -612,7 +623,7 @@ pub fn render_lgh(
     let bins = InterleavedBins::build(
         g,
         frame,
-        settings.tile,
+        settings.tile.unwrap_or_else(|| auto_tile(n)),
         n,
         &lights.position,
         &lights.reach,

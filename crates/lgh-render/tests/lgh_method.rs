@@ -431,3 +431,33 @@ fn interleaving_keeps_the_image_and_divides_the_work() {
         );
     }
 }
+
+/// The tile size only decides which lights a pixel tests, never which it shades: with 4 x 4
+/// interleaving and shadows, the default tile (4 sub-image pixels) and tiles of 16 and 1 give
+/// the same image, bit for bit (the tile lists keep the lights in the same order).
+#[test]
+fn the_tile_size_does_not_change_the_image() {
+    let world = cornell();
+    let run = |tile: Option<u32>| {
+        let s = RenderSettings {
+            width: 96,
+            height: 54,
+            vpls: 5_000,
+            area_samples: 0,
+            method: Method::Lgh,
+            component: Component::Indirect,
+            lgh: LghSettings {
+                interleave: 4,
+                tile,
+                ..LghSettings::default()
+            },
+            ..RenderSettings::default()
+        };
+        render_frame(&world, &s, &Silent).unwrap().image
+    };
+    let auto = run(None);
+    assert!(auto.pixels.iter().any(|p| p.max_element() > 0.0));
+    for tile in [1, 16] {
+        assert_eq!(run(Some(tile)), auto, "tile {tile}");
+    }
+}
