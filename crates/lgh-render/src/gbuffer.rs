@@ -3,7 +3,7 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::world::{SurfacePoint, World};
+use crate::world::World;
 use lgh_scene::camera::CameraFrame;
 
 /// Per-pixel surface attributes, structure-of-arrays, row-major from the top-left pixel.
@@ -32,17 +32,7 @@ impl GBuffer {
     /// Traces one primary ray per pixel centre, in parallel.
     #[must_use]
     pub fn render(world: &World, frame: &CameraFrame, width: u32, height: u32) -> Self {
-        let n = width as usize * height as usize;
-        let hits: Vec<Option<SurfacePoint>> = (0..n)
-            .into_par_iter()
-            .map(|i| {
-                let px = Vec2::new(
-                    (i % width as usize) as f32 + 0.5,
-                    (i / width as usize) as f32 + 0.5,
-                );
-                world.trace(frame.origin, frame.direction(px))
-            })
-            .collect();
+        let (w, n) = (width as usize, width as usize * height as usize);
         let mut g = Self {
             width,
             height,
@@ -53,16 +43,32 @@ impl GBuffer {
             depth: vec![f32::INFINITY; n],
             emission: vec![Vec3::ZERO; n],
         };
-        for (i, s) in hits.iter().enumerate() {
-            if let Some(s) = s {
-                g.position[i] = s.position;
-                g.normal[i] = s.normal;
-                g.geo_normal[i] = s.geo_normal;
-                g.albedo[i] = s.albedo;
-                g.depth[i] = (s.position - frame.origin).dot(frame.forward);
-                g.emission[i] = s.emission;
-            }
-        }
+        // Each row writes its pixels straight into the planes: no per-pixel hit records
+        // gathered first (80 B a pixel) and no serial copy after.
+        (
+            g.position.par_chunks_mut(w.max(1)),
+            g.normal.par_chunks_mut(w.max(1)),
+            g.geo_normal.par_chunks_mut(w.max(1)),
+            g.albedo.par_chunks_mut(w.max(1)),
+            g.depth.par_chunks_mut(w.max(1)),
+            g.emission.par_chunks_mut(w.max(1)),
+        )
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(y, (position, normal, geo_normal, albedo, depth, emission))| {
+                for x in 0..position.len() {
+                    let px = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                    let Some(s) = world.trace(frame.origin, frame.direction(px)) else {
+                        continue;
+                    };
+                    position[x] = s.position;
+                    normal[x] = s.normal;
+                    geo_normal[x] = s.geo_normal;
+                    albedo[x] = s.albedo;
+                    depth[x] = (s.position - frame.origin).dot(frame.forward);
+                    emission[x] = s.emission;
+                }
+            });
         g
     }
 
