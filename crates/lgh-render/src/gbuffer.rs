@@ -55,20 +55,22 @@ impl GBuffer {
         )
             .into_par_iter()
             .enumerate()
-            .for_each(|(y, (position, normal, geo_normal, albedo, depth, emission))| {
-                for x in 0..position.len() {
-                    let px = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                    let Some(s) = world.trace(frame.origin, frame.direction(px)) else {
-                        continue;
-                    };
-                    position[x] = s.position;
-                    normal[x] = s.normal;
-                    geo_normal[x] = s.geo_normal;
-                    albedo[x] = s.albedo;
-                    depth[x] = (s.position - frame.origin).dot(frame.forward);
-                    emission[x] = s.emission;
-                }
-            });
+            .for_each(
+                |(y, (position, normal, geo_normal, albedo, depth, emission))| {
+                    for x in 0..position.len() {
+                        let px = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                        let Some(s) = world.trace(frame.origin, frame.direction(px)) else {
+                            continue;
+                        };
+                        position[x] = s.position;
+                        normal[x] = s.normal;
+                        geo_normal[x] = s.geo_normal;
+                        albedo[x] = s.albedo;
+                        depth[x] = (s.position - frame.origin).dot(frame.forward);
+                        emission[x] = s.emission;
+                    }
+                },
+            );
         g
     }
 

@@ -439,8 +439,8 @@ fn trace_band(
         .sum()
 }
 
-/// Recombines the unshadowed sum `a` if interleaved (timing `interleave_blur`), filters the
-/// shadow estimates and composites: the indirect radiance albedo / pi x A x D(S) / D(U), A,
+/// Recombines the unshadowed sum `a` and the shadow estimates if interleaved (timing
+/// `interleave_blur`), filters the shadow estimates and composites: the indirect radiance albedo / pi x A x D(S) / D(U), A,
 /// the ratio and the number of rays. Timings `shadow_filter` and `composite` go to `t` too.
 #[must_use]
 pub fn shadowed_indirect(
@@ -452,11 +452,11 @@ pub fn shadowed_indirect(
     t: &mut Timings,
 ) -> Shadowed {
     let n_px = g.len();
-    let a = match &settings.interleave_blur {
-        Some(p) => t.time("interleave_blur", || interleave::recombine(&a, g, p)),
-        None => a,
-    };
     if estimates.k == 0 {
+        let a = match &settings.interleave_blur {
+            Some(p) => t.time("interleave_blur", || interleave::recombine(a, g, p)),
+            None => a,
+        };
         let ratio = ShadowRatio::unshadowed(n_px);
         let indirect = t.time("composite", || composite(g, &a, &ratio.filtered));
         return Shadowed {
@@ -472,15 +472,15 @@ pub fn shadowed_indirect(
         rays,
         ..
     } = estimates;
+    // A, S and U recombined together: one discontinuity map, one walk per pixel.
+    let [a, s_hat, u_hat] = match &settings.interleave_blur {
+        Some(p) => t.time("interleave_blur", || {
+            interleave::recombine_n([a, s_hat, u_hat], g, p)
+        }),
+        None => [a, s_hat, u_hat],
+    };
     let mut raw = Vec::new();
     let (s_f, u_f) = t.time("shadow_filter", || {
-        let (s_hat, u_hat) = match &settings.interleave_blur {
-            Some(p) => (
-                interleave::recombine(&s_hat, g, p),
-                interleave::recombine(&u_hat, g, p),
-            ),
-            None => (s_hat, u_hat),
-        };
         raw = ratio_of(&s_hat, &u_hat);
         if settings.filter_passes > 0 {
             let params = AtrousParams {
