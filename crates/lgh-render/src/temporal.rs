@@ -263,12 +263,15 @@ mod tests {
         assert!(found > w as usize * h as usize * 7 / 10, "{found}");
     }
 
+    /// The G-buffer of an 8 x 8 view of the floor (every pixel sees it).
+    fn small_view() -> GBuffer {
+        let frame = camera(0.0).frame(8, 8);
+        GBuffer::render(&floor(), &frame, 8, 8)
+    }
+
     #[test]
     fn blending_clamps_the_history_to_the_neighbourhood() {
-        let world = floor();
-        let (w, h) = (8, 8);
-        let frame = camera(0.0).frame(w, h);
-        let g = GBuffer::render(&world, &frame, w, h);
+        let g = small_view();
         let current = vec![Vec3::splat(0.5); 64];
         let prev = vec![Some(Vec3::splat(2.0)); 64];
         let out = blend(&current, &current, &prev, &g, 0.1);
@@ -285,29 +288,15 @@ mod tests {
     /// value: a history inside the spread's box is kept, one outside it is clamped to it.
     #[test]
     fn the_unfiltered_spread_bounds_the_history() {
-        let world = floor();
-        let (w, h) = (8, 8);
-        let frame = camera(0.0).frame(w, h);
-        let g = GBuffer::render(&world, &frame, w, h);
+        let g = small_view();
         let current = vec![Vec3::splat(0.5); 64];
         // Raw estimates alternating 0.25 and 0.75, as a few shadow samples give.
         let spread: Vec<Vec3> = (0..64)
             .map(|i| Vec3::splat(if (i + i / 8) % 2 == 0 { 0.25 } else { 0.75 }))
             .collect();
-        let kept = blend(
-            &current,
-            &spread,
-            &vec![Some(Vec3::splat(0.7)); 64],
-            &g,
-            0.1,
-        );
-        let clamped = blend(
-            &current,
-            &spread,
-            &vec![Some(Vec3::splat(2.0)); 64],
-            &g,
-            0.1,
-        );
+        let with_history =
+            |v: f32| blend(&current, &spread, &vec![Some(Vec3::splat(v)); 64], &g, 0.1);
+        let (kept, clamped) = (with_history(0.7), with_history(2.0));
         for i in 0..64 {
             assert!((kept[i] - Vec3::splat(0.05 + 0.63)).abs().max_element() < 1e-6);
             assert!((clamped[i] - Vec3::splat(0.05 + 0.675)).abs().max_element() < 1e-6);
