@@ -326,19 +326,11 @@ impl ShadeLights {
                     let Some(j) = r.sample.map(|s| s.light as usize) else {
                         continue;
                     };
-                    // The representatives' contributions as VPLs of the light's intensity.
+                    // The representatives' contributions (an empty slot has n_q = 0).
+                    let at = SLOTS * j;
                     let weights: [f32; SLOTS] = std::array::from_fn(|s| {
-                        self.representative(j, s).map_or(0.0, |(q, nq)| {
-                            luminance(light_irradiance(
-                                xp,
-                                nx,
-                                q,
-                                nq,
-                                0.0,
-                                self.intensity[j],
-                                eps2,
-                            ))
-                        })
+                        let (q, nq) = (self.rep_position[at + s], self.rep_normal[at + s]);
+                        representative_weight(xp, nx, q, nq, eps2)
                     });
                     let total: f32 = weights.iter().sum();
                     if total <= 0.0 {
@@ -392,6 +384,19 @@ impl ShadeLights {
 #[must_use]
 pub fn auto_tile(n: u32) -> u32 {
     (16 / n.max(1)).max(4)
+}
+
+/// The contribution at x (normal n_x) of a representative VPL at q (normal n_q) as a VPL
+/// of its light's intensity I, up to the factor luminance(I) / pi that a light's
+/// representatives share: cos_x cos_q / (d^2 + eps^2) = max(0, n_x . d) max(0, -n_q . d) /
+/// (d^2 (d^2 + eps^2)), d = q - x, without a branch or a square root (the shadow targets
+/// weigh 8 of them per selected sample). Zero where d = 0.
+#[inline]
+fn representative_weight(x: Vec3, n_x: Vec3, q: Vec3, n_q: Vec3, eps2: f32) -> f32 {
+    let d = q - x;
+    let d2 = d.length_squared();
+    let w = n_x.dot(d).max(0.0) * (-n_q.dot(d)).max(0.0) / (d2 * (d2 + eps2));
+    if w.is_finite() { w } else { 0.0 }
 }
 
 /// What the lighting loop of one row reads.
@@ -689,4 +694,38 @@ pub fn render_lgh(
     );
     out.timings = t;
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lgh_core::rng::Rng;
+
+    /// The representatives' weight is their VPL contribution divided by luminance(I) / pi,
+    /// for random positions and normals (both sides of both surfaces), and zero at d = 0.
+    #[test]
+    fn representative_weight_is_the_vpl_contribution() {
+        let mut rng = Rng::new(&[17, 3]);
+        let mut v = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+        let intensity = Vec3::new(0.7, 1.3, 0.4);
+        let eps2 = 1e-4;
+        let mut lit = 0;
+        for _ in 0..2000 {
+            let (x, q) = (v(), v());
+            let (n_x, n_q) = (v().normalize(), v().normalize());
+            let exact = luminance(light_irradiance(x, n_x, q, n_q, 0.0, intensity, eps2));
+            let w = representative_weight(x, n_x, q, n_q, eps2) * luminance(intensity)
+                / std::f32::consts::PI;
+            assert!(
+                (w - exact).abs() <= 1e-4 * exact.max(1e-3),
+                "{w} vs {exact}"
+            );
+            lit += usize::from(exact > 0.0);
+        }
+        assert!(lit > 300, "{lit}");
+        assert_eq!(
+            representative_weight(Vec3::ONE, Vec3::Y, Vec3::ONE, -Vec3::Y, eps2),
+            0.0
+        );
+    }
 }
