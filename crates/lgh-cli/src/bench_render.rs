@@ -32,6 +32,10 @@ pub struct RenderBenchArgs {
     /// alpha of the blending radii.
     #[arg(long, default_value_t = 1.0)]
     pub alpha: f32,
+    /// Interleaving n (n x n sub-images) of the Table 3 runs, comma-separated (the paper's
+    /// Table 3 compares 1, 2 and 4). Table 2 is without interleaving.
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    pub interleave: Vec<u32>,
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
@@ -41,6 +45,9 @@ pub struct RenderBenchArgs {
 }
 
 pub fn run(args: &RenderBenchArgs) -> Result<()> {
+    if let Some(n) = args.interleave.iter().find(|n| !(1..=16).contains(*n)) {
+        anyhow::bail!("--interleave {n}: expected 1 to 16");
+    }
     let threads = crate::set_threads(args.threads)?;
     let scene = load_scene(args.scene.as_deref())?;
     let name = scene.name.clone();
@@ -59,10 +66,16 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
         let mut builder = GridBuilder::default();
         let mut per_k = serde_json::Map::new();
         let mut build_ms = 0.0;
-        for k in [0u32, 1, 4] {
+        // Table 2: k = 0, 1, 4 without interleaving; Table 3: k = 4 at each interleaving.
+        let runs = [0u32, 1, 4]
+            .map(|k| (k, 1))
+            .into_iter()
+            .chain(args.interleave.iter().filter(|&&n| n != 1).map(|&n| (4, n)));
+        for (k, n) in runs {
             let settings = LghSettings {
                 alpha: args.alpha,
                 shadow_samples: k,
+                interleave: n,
                 ..LghSettings::default()
             };
             let start = Instant::now();
@@ -81,12 +94,13 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
             let get = |name: &str| out.timings.get(name).unwrap_or(0.0);
             build_ms = get("lgh_build");
             per_k.insert(
-                format!("shadow_samples_{k}"),
+                run_key(k, n),
                 serde_json::json!({
                     "lighting_ms": get("lighting"),
                     "representatives_ms": get("representatives"),
                     "shadow_targets_ms": get("shadow_targets"),
                     "shadow_rays_ms": get("shadow_rays"),
+                    "interleave_blur_ms": get("interleave_blur"),
                     "shadow_filter_ms": get("shadow_filter"),
                     "composite_ms": get("composite"),
                     "render_ms": total - build_ms,
@@ -136,32 +150,50 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
         );
     }
     println!(
-        "\nTable 3 (4 shadow samples): {:>9} {:>9} {:>9} {:>9} {:>9} {:>11} {:>11} {:>10} {:>9}",
+        "\nTable 3 (4 shadow samples): {:>9} {:>3} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>11} {:>10} {:>9}",
         "VPLs",
+        "il",
         "G-buffer",
         "reps",
         "lighting",
         "targets",
         "shadow rays",
+        "blur",
         "shadow filt",
         "composite",
         "overdraw"
     );
+    let mut interleaves = vec![1];
+    interleaves.extend(args.interleave.iter().filter(|&&n| n != 1));
     for r in &rows {
-        let k = &r["runs"]["shadow_samples_4"];
-        let f = |key: &str| k[key].as_f64().unwrap_or(0.0);
-        println!(
-            "                            {:>9} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>11.1} {:>11.1} {:>10.1} {:>9.1}",
-            r["vpls"],
-            gbuffer_ms,
-            f("representatives_ms"),
-            f("lighting_ms"),
-            f("shadow_targets_ms"),
-            f("shadow_rays_ms"),
-            f("shadow_filter_ms"),
-            f("composite_ms"),
-            f("avg_overdraw")
-        );
+        for &n in &interleaves {
+            let k = &r["runs"][run_key(4, n)];
+            let f = |key: &str| k[key].as_f64().unwrap_or(0.0);
+            println!(
+                "                            {:>9} {:>3} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>11.1} {:>9.1} {:>11.1} {:>10.1} {:>9.1}",
+                r["vpls"],
+                n,
+                gbuffer_ms,
+                f("representatives_ms"),
+                f("lighting_ms"),
+                f("shadow_targets_ms"),
+                f("shadow_rays_ms"),
+                f("interleave_blur_ms"),
+                f("shadow_filter_ms"),
+                f("composite_ms"),
+                f("avg_overdraw")
+            );
+        }
     }
     Ok(())
+}
+
+/// The JSON key of the run with `k` shadow samples and n x n interleaving:
+/// `shadow_samples_K`, with `_interleave_N` for n > 1.
+fn run_key(k: u32, n: u32) -> String {
+    if n == 1 {
+        format!("shadow_samples_{k}")
+    } else {
+        format!("shadow_samples_{k}_interleave_{n}")
+    }
 }

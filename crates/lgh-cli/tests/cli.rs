@@ -296,7 +296,15 @@ fn lgh_render_writes_stats_and_heatmap_and_bench_render_reports_tables() {
         assert!(v["timings_ms"][key].is_f64(), "missing timings_ms.{key}");
     }
     let out = lgh(&[
-        "bench", "render", "--vpls", "500", "--size", "32x24", "--json",
+        "bench",
+        "render",
+        "--vpls",
+        "500",
+        "--size",
+        "32x24",
+        "--interleave",
+        "1,4",
+        "--json",
     ]);
     assert!(
         out.status.success(),
@@ -305,9 +313,21 @@ fn lgh_render_writes_stats_and_heatmap_and_bench_render_reports_tables() {
     );
     let b: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let row = &b["rows"][0];
-    for k in ["shadow_samples_0", "shadow_samples_1", "shadow_samples_4"] {
+    for k in [
+        "shadow_samples_0",
+        "shadow_samples_1",
+        "shadow_samples_4",
+        "shadow_samples_4_interleave_4",
+    ] {
         assert!(row["runs"][k]["render_ms"].is_f64(), "missing {k}");
     }
+    assert!(
+        row["runs"]["shadow_samples_4_interleave_4"]["interleave_blur_ms"].as_f64() > Some(0.0)
+    );
+    assert_error(
+        &lgh(&["bench", "render", "--interleave", "0"]),
+        &["--interleave"],
+    );
     assert_error(
         &lgh(&["render", "--method", "lgh", "--alpha=-1"]),
         &["--alpha"],
