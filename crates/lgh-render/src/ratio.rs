@@ -440,8 +440,9 @@ fn trace_band(
 }
 
 /// Recombines the unshadowed sum `a` and the shadow estimates if interleaved (timing
-/// `interleave_blur`), filters the shadow estimates and composites: the indirect radiance albedo / pi x A x D(S) / D(U), A,
-/// the ratio and the number of rays. Timings `shadow_filter` and `composite` go to `t` too.
+/// `interleave_blur`), filters the shadow estimates and composites: the indirect radiance
+/// albedo / pi x A x D(S) / D(U), A, the ratio (filtered and raw) and the number of rays.
+/// Timings `shadow_filter` and `composite` go to `t` too.
 #[must_use]
 pub fn shadowed_indirect(
     world: &World,
