@@ -45,13 +45,14 @@ impl GBuffer {
         };
         // Each row writes its pixels straight into the planes: no per-pixel hit records
         // gathered first (80 B a pixel) and no serial copy after.
+        let row = w.max(1);
         (
-            g.position.par_chunks_mut(w.max(1)),
-            g.normal.par_chunks_mut(w.max(1)),
-            g.geo_normal.par_chunks_mut(w.max(1)),
-            g.albedo.par_chunks_mut(w.max(1)),
-            g.depth.par_chunks_mut(w.max(1)),
-            g.emission.par_chunks_mut(w.max(1)),
+            g.position.par_chunks_mut(row),
+            g.normal.par_chunks_mut(row),
+            g.geo_normal.par_chunks_mut(row),
+            g.albedo.par_chunks_mut(row),
+            g.depth.par_chunks_mut(row),
+            g.emission.par_chunks_mut(row),
         )
             .into_par_iter()
             .enumerate()
