@@ -63,32 +63,34 @@ pub fn representatives(
     let grid = Lookup::new(grid);
     // S_1 from the input lights, visited in cell-row order so that the vertices and slots
     // they update are near each other in memory (the result does not depend on the order).
-    let r1 = grid.grid.geometry.cells_per_axis(1) as u64;
-    let mut order: Vec<(u64, u32)> = lights
+    // Each entry carries what the offer needs (cell, fraction, luminance), so that the
+    // visit reads memory in order instead of gathering the lights' arrays by index.
+    // Cells per axis at level 1 are a power of two: the key packs (z, y, x) in `b` bits each.
+    let b = grid.grid.geometry.cells_per_axis(1).trailing_zeros();
+    let mut order: Vec<(u64, u32, Vec3, f32)> = lights
         .positions
         .par_iter()
+        .zip(lights.intensity.par_iter())
         .enumerate()
-        .map(|(i, &p)| {
-            let (c, _) = grid.locate(1, p);
+        .map(|(i, (&p, &intensity))| {
+            let (c, f) = grid.locate(1, p);
             (
-                (u64::from(c.z) * r1 + u64::from(c.y)) * r1 + u64::from(c.x),
+                (u64::from(c.z) << (2 * b)) | (u64::from(c.y) << b) | u64::from(c.x),
                 i as u32,
+                f,
+                luminance(intensity),
             )
         })
         .collect();
-    order.par_sort_unstable();
-    order.par_iter().for_each(|&(_, i)| {
-        let i = i as usize;
-        offer(
-            &grid,
-            &keys,
-            1,
-            grid.locate(1, lights.positions[i]),
-            luminance(lights.intensity[i]),
-            seed,
-            i as u64,
-            |_| i as u32,
+    order.par_sort_unstable_by_key(|e| (e.0, e.1));
+    order.par_iter().for_each(|&(key, i, f, lum)| {
+        let mask = (1u64 << b) - 1;
+        let c = UVec3::new(
+            (key & mask) as u32,
+            ((key >> b) & mask) as u32,
+            (key >> (2 * b)) as u32,
         );
+        offer(&grid, &keys, 1, (c, f), lum, seed, u64::from(i), |_| i);
     });
     let reps_of = |level: u32| -> (std::ops::Range<usize>, Vec<u32>) {
         let range = grid.grid.level_range(level);
