@@ -283,7 +283,8 @@ impl GridBuilder {
             let mut l = guess;
             if guess == 1 || fits(count(&mut self.ws, guess)) {
                 // The next level is usually too fine: count it from this sort while the
-                // sorted sources are still in the cache, then build the guess from it.
+                // sorted sources are still in the cache; if the guess stays the answer, build
+                // it from the same sort.
                 let finer = |ws: &mut splat::Workspace, l: u32| {
                     let g = GridGeometry::new(lo, hi, l);
                     splat::count_vertices_finer(ws, &src, &g, 1).unwrap_or_else(|| count(ws, l + 1))

@@ -777,7 +777,7 @@ pub fn count_vertices_finer(
         (0..=r)
             .into_par_iter()
             .map(|m| {
-                count_layers(side, |even, odd| {
+                count_layers(side, |[even, odd]: &mut [LayerBits; 2]| {
                     // With t = 2 f_z, a source of coarse layer m lies in the finer cell layer
                     // 2m (t < 1, fraction t) or 2m + 1 (t >= 1, fraction t - 1), and its z
                     // weights follow without asking which: max(0, t - 1) in finer vertex
@@ -806,21 +806,23 @@ pub fn count_vertices_finer(
 /// Vertices of one layer (`side` x `side` vertices) marked by `visit` (see
 /// [`LayerBits::mark`]).
 fn count_layer(side: u32, visit: impl FnOnce(&mut LayerBits)) -> usize {
-    count_layers(side, |layer, _| visit(layer))
+    count_layers(side, |[layer]: &mut [LayerBits; 1]| visit(layer))
 }
 
-/// Vertices of two layers (`side` x `side` vertices each) marked by `visit`.
-fn count_layers(side: u32, visit: impl FnOnce(&mut LayerBits, &mut LayerBits)) -> usize {
+/// Vertices of `N` layers (`side` x `side` vertices each) marked by `visit`.
+fn count_layers<const N: usize>(side: u32, visit: impl FnOnce(&mut [LayerBits; N])) -> usize {
     with_bits(|bits| {
         let side = side as usize;
         let words = (side * side).div_ceil(64);
         bits.clear();
-        bits.resize(2 * words, 0);
-        let (a, b) = bits.split_at_mut(words);
-        visit(
-            &mut LayerBits { bits: a, side },
-            &mut LayerBits { bits: b, side },
-        );
+        bits.resize(N * words, 0);
+        let mut rest: &mut [u64] = bits;
+        let mut layers: [LayerBits; N] = std::array::from_fn(|_| {
+            let (layer, tail) = std::mem::take(&mut rest).split_at_mut(words);
+            rest = tail;
+            LayerBits { bits: layer, side }
+        });
+        visit(&mut layers);
         bits.iter().map(|b| b.count_ones() as usize).sum()
     })
 }
