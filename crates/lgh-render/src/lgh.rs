@@ -203,10 +203,55 @@ struct ShadeLights {
     radius: Vec<f32>,
     role: Vec<LevelRole>,
     reach: Vec<f32>,
-    /// [`SLOTS`] representative VPL positions per light (shadow target `Representative`;
-    /// empty otherwise), with their normals; a zero normal marks an empty slot.
-    rep_position: Vec<Vec3>,
-    rep_normal: Vec<Vec3>,
+    /// The [`SLOTS`] representative VPLs of each light (shadow target `Representative`;
+    /// empty otherwise).
+    reps: Vec<RepSet>,
+}
+
+/// The [`SLOTS`] representative VPLs of one light, structure of arrays (positions and
+/// normals per axis), so that weighing all of them for a pixel is a few vector operations on
+/// three cache lines. A zero normal marks an empty slot.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(align(64))]
+struct RepSet {
+    position: [[f32; SLOTS]; 3],
+    normal: [[f32; SLOTS]; 3],
+}
+
+impl RepSet {
+    /// Slot `s`: position and normal.
+    fn get(&self, s: usize) -> (Vec3, Vec3) {
+        let [px, py, pz] = self.position;
+        let [nx, ny, nz] = self.normal;
+        (
+            Vec3::new(px[s], py[s], pz[s]),
+            Vec3::new(nx[s], ny[s], nz[s]),
+        )
+    }
+
+    /// Sets slot `s`.
+    fn set(&mut self, s: usize, p: Vec3, n: Vec3) {
+        for a in 0..3 {
+            self.position[a][s] = p[a];
+            self.normal[a][s] = n[a];
+        }
+    }
+
+    /// [`representative_weight`] of every slot for the pixel at `x` with normal `n_x`.
+    #[inline]
+    fn weights(&self, x: Vec3, n_x: Vec3, eps2: f32) -> [f32; SLOTS] {
+        let [px, py, pz] = self.position;
+        let [nx, ny, nz] = self.normal;
+        std::array::from_fn(|s| {
+            representative_weight(
+                x,
+                n_x,
+                Vec3::new(px[s], py[s], pz[s]),
+                Vec3::new(nx[s], ny[s], nz[s]),
+                eps2,
+            )
+        })
+    }
 }
 
 impl ShadeLights {
@@ -276,29 +321,31 @@ impl ShadeLights {
         let reps = representatives(grid, &input, from_level, construction, seed);
         if lowest == 0 {
             // A VPL stands for itself.
-            for (&p, &n) in vpls.positions.iter().zip(&vpls.normals) {
-                self.rep_position.extend(std::iter::repeat_n(p, SLOTS));
-                self.rep_normal.extend(std::iter::repeat_n(n, SLOTS));
-            }
+            self.reps
+                .extend(vpls.positions.iter().zip(&vpls.normals).map(|(&p, &n)| {
+                    let mut set = RepSet::default();
+                    for s in 0..SLOTS {
+                        set.set(s, p, n);
+                    }
+                    set
+                }));
         }
         let first = grid.level_range(1).start;
-        for &r in &reps[SLOTS * first..] {
-            let (p, n) = if r == NONE {
-                (Vec3::ZERO, Vec3::ZERO)
-            } else {
-                (vpls.positions[r as usize], vpls.normals[r as usize])
-            };
-            self.rep_position.push(p);
-            self.rep_normal.push(n);
-        }
+        self.reps
+            .extend(reps[SLOTS * first..].chunks(SLOTS).map(|slots| {
+                let mut set = RepSet::default();
+                for (s, &r) in slots.iter().enumerate() {
+                    if r != NONE {
+                        set.set(s, vpls.positions[r as usize], vpls.normals[r as usize]);
+                    }
+                }
+                set
+            }));
     }
 
     /// Representative `s` of light `j`: its position and normal, or `None` for an empty slot.
     fn representative(&self, j: usize, s: usize) -> Option<(Vec3, Vec3)> {
-        let (q, nq) = (
-            self.rep_position[SLOTS * j + s],
-            self.rep_normal[SLOTS * j + s],
-        );
+        let (q, nq) = self.reps[j].get(s);
         (nq != Vec3::ZERO).then_some((q, nq))
     }
 
@@ -327,11 +374,7 @@ impl ShadeLights {
                         continue;
                     };
                     // The representatives' contributions (an empty slot has n_q = 0).
-                    let at = SLOTS * j;
-                    let weights: [f32; SLOTS] = std::array::from_fn(|s| {
-                        let (q, nq) = (self.rep_position[at + s], self.rep_normal[at + s]);
-                        representative_weight(xp, nx, q, nq, eps2)
-                    });
+                    let weights = self.reps[j].weights(xp, nx, eps2);
                     let total: f32 = weights.iter().sum();
                     if total <= 0.0 {
                         // None of the VPLs the light stands for lights the pixel: its
@@ -350,8 +393,7 @@ impl ShadeLights {
                         u -= wt;
                     }
                     if let Some(sample) = r.sample.as_mut() {
-                        let s = SLOTS * j + pick;
-                        (sample.q, sample.n) = (self.rep_position[s], self.rep_normal[s]);
+                        (sample.q, sample.n) = self.reps[j].get(pick);
                     }
                 }
             }
