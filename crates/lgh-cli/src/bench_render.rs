@@ -5,11 +5,10 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clap::Args;
-use lgh_core::lighting_grid::GridBuilder;
-use lgh_render::World;
 use lgh_render::gbuffer::GBuffer;
 use lgh_render::lgh::{LghSettings, render_lgh};
 use lgh_render::vpl_gen::generate_vpls;
+use lgh_render::{FrameMemory, World};
 
 use crate::render_cmd::parse_size;
 use crate::scene_arg::load_scene;
@@ -63,7 +62,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
         let t = Instant::now();
         let set = generate_vpls(&world, n, 3, 0);
         let vpl_ms = t.elapsed().as_secs_f64() * 1e3;
-        let mut builder = GridBuilder::default();
+        let mut memory = FrameMemory::default();
         let mut per_k = serde_json::Map::new();
         let mut build_ms = 0.0;
         // Table 2: k = 0, 1, 4 without interleaving; Table 3: k = 4 at each interleaving.
@@ -88,7 +87,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
                 &settings,
                 0,
                 k > 0,
-                &mut builder,
+                &mut memory,
             )?;
             let total = start.elapsed().as_secs_f64() * 1e3;
             let get = |name: &str| out.timings.get(name).unwrap_or(0.0);

@@ -34,9 +34,7 @@ use glam::Vec3;
 use lgh_core::blending::{LevelRole, blend};
 use lgh_core::color::luminance;
 use lgh_core::lighting_grid::representative::{NONE, SLOTS, representatives};
-use lgh_core::lighting_grid::{
-    Construction, GridBuilder, GridError, InputLights, LevelCount, LightingGrid,
-};
+use lgh_core::lighting_grid::{Construction, GridError, InputLights, LevelCount, LightingGrid};
 use lgh_core::reservoir::Reservoir;
 use lgh_core::rng::Rng;
 use lgh_core::sampling::raised_cosine;
@@ -44,7 +42,7 @@ use lgh_core::vpl::{GridEmission, Vpls, light_irradiance};
 use lgh_scene::camera::CameraFrame;
 use rayon::prelude::*;
 
-use crate::frame::Timings;
+use crate::frame::{FrameMemory, Timings};
 use crate::gbuffer::GBuffer;
 use crate::interleave::BlurParams;
 use crate::light_batch::{LANES, LightBatch, PackedLight};
@@ -605,8 +603,9 @@ pub fn render_lgh(
     settings: &LghSettings,
     seed: u64,
     shadows: bool,
-    builder: &mut GridBuilder,
+    memory: &mut FrameMemory,
 ) -> Result<LghOutput, GridError> {
+    let builder = &mut memory.grid;
     let mut t = Timings::default();
     let n_px = g.len();
     let mut out = LghOutput {
@@ -727,7 +726,7 @@ pub fn render_lgh(
         interleave_blur: (n > 1).then_some(settings.blur),
         seed,
     };
-    let shadowed = shadowed_indirect(world, g, a, estimates, &shadow, &mut t);
+    let shadowed = shadowed_indirect(world, g, a, estimates, &shadow, &mut t, &mut memory.filter);
     (out.indirect, out.unshadowed, out.ratio, out.shadow_rays) = (
         shadowed.indirect,
         shadowed.unshadowed,

@@ -59,8 +59,8 @@ pub mod vpl_gen;
 pub mod world;
 
 pub use frame::{
-    Component, Frame, LghStats, Method, PtStats, RenderError, RenderSettings, SlcStats,
-    render_frame,
+    Component, Frame, FrameMemory, LghStats, Method, PtStats, RenderError, RenderSettings,
+    SlcStats, render_frame, render_frame_with,
 };
 pub use image::Image;
 pub use progress::{Progress, Silent};

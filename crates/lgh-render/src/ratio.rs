@@ -24,7 +24,7 @@ use lgh_core::rng::Rng;
 use lgh_core::sampling::raised_cosine;
 use rayon::prelude::*;
 
-use crate::atrous::{AtrousParams, filter_ratio_pair};
+use crate::atrous::{AtrousBuffers, AtrousParams, filter_ratio_pair_with};
 use crate::frame::Timings;
 use crate::gbuffer::GBuffer;
 use crate::interleave::{self, BlurParams};
@@ -442,7 +442,7 @@ fn trace_band(
 /// Recombines the unshadowed sum `a` and the shadow estimates if interleaved (timing
 /// `interleave_blur`), filters the shadow estimates and composites: the indirect radiance
 /// albedo / pi x A x D(S) / D(U), A, the ratio (filtered and raw) and the number of rays.
-/// Timings `shadow_filter` and `composite` go to `t` too.
+/// Timings `shadow_filter` and `composite` go to `t` too. The filter works in `buffers`.
 #[must_use]
 pub fn shadowed_indirect(
     world: &World,
@@ -451,6 +451,7 @@ pub fn shadowed_indirect(
     estimates: ShadowEstimates,
     settings: &ShadowSettings,
     t: &mut Timings,
+    buffers: &mut AtrousBuffers,
 ) -> Shadowed {
     let n_px = g.len();
     if estimates.k == 0 {
@@ -488,7 +489,7 @@ pub fn shadowed_indirect(
                 passes: settings.filter_passes,
                 ..AtrousParams::lgh_defaults(world.radius)
             };
-            filter_ratio_pair(&s_hat, &u_hat, g, &params)
+            filter_ratio_pair_with(&s_hat, &u_hat, g, &params, buffers)
         } else {
             (s_hat, u_hat)
         }

@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 
-use crate::frame::{Frame, RenderError, RenderSettings, render_frame};
+use crate::frame::{Frame, FrameMemory, RenderError, RenderSettings, render_frame_with};
 use crate::progress::Progress;
 use crate::ratio::composite;
 use crate::temporal::{TemporalFilter, TemporalSettings, TemporalTarget};
@@ -15,6 +15,8 @@ use crate::world::World;
 #[derive(Clone, Debug, Default)]
 pub struct Sequence {
     filter: TemporalFilter,
+    /// Working memory reused from frame to frame.
+    memory: FrameMemory,
     /// The temporal filter, or `None` for independent frames.
     pub taa: Option<TemporalSettings>,
 }
@@ -25,6 +27,7 @@ impl Sequence {
     pub fn new(taa: Option<TemporalSettings>) -> Self {
         Self {
             filter: TemporalFilter::default(),
+            memory: FrameMemory::default(),
             taa,
         }
     }
@@ -40,7 +43,7 @@ impl Sequence {
         settings: &RenderSettings,
         progress: &dyn Progress,
     ) -> Result<Frame, RenderError> {
-        let mut f = render_frame(world, settings, progress)?;
+        let mut f = render_frame_with(world, settings, progress, &mut self.memory)?;
         let Some(taa) = self.taa else {
             return Ok(f);
         };

@@ -30,6 +30,7 @@ use lgh_core::vpl::{Vpls, vpl_irradiance};
 use lgh_scene::camera::CameraFrame;
 use rayon::prelude::*;
 
+use crate::atrous::AtrousBuffers;
 use crate::frame::Timings;
 use crate::gbuffer::GBuffer;
 use crate::interleave::BlurParams;
@@ -277,7 +278,15 @@ pub fn render_slc(
         interleave_blur: (n > 1).then_some(settings.blur),
         seed,
     };
-    let shadowed = shadowed_indirect(world, g, a, estimates, &shadow, &mut t);
+    let shadowed = shadowed_indirect(
+        world,
+        g,
+        a,
+        estimates,
+        &shadow,
+        &mut t,
+        &mut AtrousBuffers::default(),
+    );
     SlcOutput {
         indirect: shadowed.indirect,
         unshadowed: shadowed.unshadowed,
