@@ -3,6 +3,7 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
+use crate::passes::par_filled;
 use crate::world::World;
 use lgh_scene::camera::CameraFrame;
 
@@ -36,12 +37,12 @@ impl GBuffer {
         let mut g = Self {
             width,
             height,
-            position: vec![Vec3::ZERO; n],
-            normal: vec![Vec3::ZERO; n],
-            geo_normal: vec![Vec3::ZERO; n],
-            albedo: vec![Vec3::ZERO; n],
-            depth: vec![f32::INFINITY; n],
-            emission: vec![Vec3::ZERO; n],
+            position: par_filled(n, Vec3::ZERO),
+            normal: par_filled(n, Vec3::ZERO),
+            geo_normal: par_filled(n, Vec3::ZERO),
+            albedo: par_filled(n, Vec3::ZERO),
+            depth: par_filled(n, f32::INFINITY),
+            emission: par_filled(n, Vec3::ZERO),
         };
         // Each row writes its pixels straight into the planes: no per-pixel hit records
         // gathered first (80 B a pixel) and no serial copy after.

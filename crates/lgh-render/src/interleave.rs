@@ -18,6 +18,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::gbuffer::GBuffer;
+use crate::passes::par_filled;
 
 /// One sub-image of n x n interleaving: the pixels (x, y) with x mod n = `sx` and
 /// y mod n = `sy`. `n = 1` is the whole image.
@@ -241,7 +242,7 @@ pub fn blur_n<const N: usize>(
             *o = sum / wsum;
         });
     };
-    let mut scratch = vec![Vec3::ZERO; g.len()];
+    let mut scratch = par_filled(g.len(), Vec3::ZERO);
     for img in &mut imgs {
         pass(img, &mut scratch, 1, &right, &left);
         pass(&scratch, img, w, &down, &up);

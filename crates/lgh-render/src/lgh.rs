@@ -46,6 +46,7 @@ use crate::frame::{FrameMemory, Timings};
 use crate::gbuffer::GBuffer;
 use crate::interleave::BlurParams;
 use crate::light_batch::{LANES, LightBatch, PackedLight};
+use crate::passes::par_filled;
 use crate::ratio::{
     ReservoirLayout, ShadowPass, ShadowRatio, ShadowReservoirs, ShadowSample, ShadowSettings,
     halves, offer, shadowed_indirect,
@@ -609,8 +610,8 @@ pub fn render_lgh(
     let mut t = Timings::default();
     let n_px = g.len();
     let mut out = LghOutput {
-        indirect: vec![Vec3::ZERO; n_px],
-        overdraw: vec![0; n_px],
+        indirect: par_filled(n_px, Vec3::ZERO),
+        overdraw: par_filled(n_px, 0),
         ..LghOutput::default()
     };
     if vpls.is_empty() {
@@ -685,7 +686,7 @@ pub fn render_lgh(
     let representative = settings.shadow_target == ShadowTarget::Representative;
     let packed = lights.packed(scale);
     // Per pixel: A and overdraw; and k reservoirs.
-    let mut shaded: Vec<(Vec3, u32)> = vec![(Vec3::ZERO, 0); n_px];
+    let mut shaded: Vec<(Vec3, u32)> = par_filled(n_px, (Vec3::ZERO, 0));
     let layout = ReservoirLayout::new(k);
     let ctx = RowContext {
         g,
@@ -708,7 +709,7 @@ pub fn render_lgh(
         (representative && settings.jitter == JitterAt::Ray)
             .then_some(&resolve as &(dyn Fn(&mut ShadowReservoirs) + Sync)),
     );
-    out.overdraw = shaded.iter().map(|p| p.1).collect();
+    out.overdraw = shaded.par_iter().map(|p| p.1).collect();
     t.push(
         "lighting",
         lighting_ms
@@ -720,7 +721,7 @@ pub fn render_lgh(
     if k > 0 {
         t.push("shadow_rays", times.rays_ms);
     }
-    let a: Vec<Vec3> = shaded.iter().map(|p| p.0).collect();
+    let a: Vec<Vec3> = shaded.par_iter().map(|p| p.0).collect();
     let shadow = ShadowSettings {
         filter_passes: settings.filter_passes,
         interleave_blur: (n > 1).then_some(settings.blur),

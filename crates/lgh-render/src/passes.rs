@@ -5,6 +5,14 @@ use rayon::prelude::*;
 
 use crate::progress::Progress;
 
+/// `n` copies of `value`, written in parallel. `vec![value; n]` writes them on one thread,
+/// and for an image-sized buffer that thread also takes every page fault of the fresh
+/// memory (measured: about 1.5 ms per 11 MB buffer here, 10 ms of the G-buffer's 55).
+#[must_use]
+pub fn par_filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
+    (0..n).into_par_iter().map(|_| value).collect()
+}
+
 /// Runs `f` for every pixel index of a `width` x `len / width` image, rows in parallel, and
 /// reports one unit of progress per row. Each pixel's value depends only on its index, so the
 /// result is the same whatever the thread count.
@@ -12,7 +20,7 @@ pub fn per_pixel<F>(len: usize, width: usize, progress: &dyn Progress, f: F) -> 
 where
     F: Fn(usize) -> Vec3 + Sync,
 {
-    let mut out = vec![Vec3::ZERO; len];
+    let mut out = par_filled(len, Vec3::ZERO);
     out.par_chunks_mut(width.max(1))
         .enumerate()
         .for_each(|(y, row)| {

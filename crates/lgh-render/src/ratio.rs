@@ -28,6 +28,7 @@ use crate::atrous::{AtrousBuffers, AtrousParams, filter_ratio_pair_with};
 use crate::frame::Timings;
 use crate::gbuffer::GBuffer;
 use crate::interleave::{self, BlurParams};
+use crate::passes::par_filled;
 use crate::world::World;
 
 /// Most shadow samples per pixel.
@@ -345,8 +346,8 @@ impl<'a> ShadowPass<'a> {
         let n_px = g.len();
         let mut est = ShadowEstimates {
             k,
-            s: vec![Vec3::ZERO; if k > 0 { n_px } else { 0 }],
-            u: vec![Vec3::ZERO; if k > 0 { n_px } else { 0 }],
+            s: par_filled(if k > 0 { n_px } else { 0 }, Vec3::ZERO),
+            u: par_filled(if k > 0 { n_px } else { 0 }, Vec3::ZERO),
             rays: 0,
         };
         let mut times = BandTimes::default();

@@ -35,6 +35,7 @@ use crate::frame::Timings;
 use crate::gbuffer::GBuffer;
 use crate::interleave::BlurParams;
 use crate::ism::{IsmSettings, PointCloud, ShadowMaps};
+use crate::passes::par_filled;
 use crate::ratio::{
     ReservoirLayout, ShadowPass, ShadowRatio, ShadowSample, ShadowSettings, offer,
     shadowed_indirect,
@@ -217,7 +218,7 @@ pub fn render_slc(
     });
     // Step 3: shading.
     let w = g.width as usize;
-    let mut shaded: Vec<(Vec3, u32)> = vec![(Vec3::ZERO, 0); n_px];
+    let mut shaded: Vec<(Vec3, u32)> = par_filled(n_px, (Vec3::ZERO, 0));
     let layout = ReservoirLayout::new(k);
     let (estimates, times) = ShadowPass::new(world, g, k, seed).shade_in_bands(
         &mut shaded,
@@ -271,8 +272,8 @@ pub fn render_slc(
     if k > 0 {
         t.push("shadow_rays", times.rays_ms);
     }
-    let lights_per_pixel = shaded.iter().map(|p| p.1).collect();
-    let a: Vec<Vec3> = shaded.into_iter().map(|p| p.0).collect();
+    let lights_per_pixel = shaded.par_iter().map(|p| p.1).collect();
+    let a: Vec<Vec3> = shaded.into_par_iter().map(|p| p.0).collect();
     let shadow = ShadowSettings {
         filter_passes: settings.filter_passes,
         interleave_blur: (n > 1).then_some(settings.blur),
