@@ -95,70 +95,69 @@ impl LightBatch {
     }
 
     /// Fills the batch with the lights `list` (global indices into `packed`), in order.
+    ///
+    /// The arrays are sized once and written through local slices: pushing to 17 vectors
+    /// kept every length and capacity in memory (the compiler cannot keep them in registers
+    /// across the other vectors' stores), which cost more than the light data's cache misses.
     pub fn fill(
         &mut self,
         key: (usize, usize),
         packed: &[PackedLight],
         list: impl Iterator<Item = usize>,
     ) {
-        self.key = Some(key);
-        self.index.clear();
-        self.level.clear();
-        for v in self
-            .pos
+        let Self {
+            key: batch_key,
+            index,
+            level,
+            pos,
+            normal,
+            intensity,
+            iso,
+            inv_radius,
+            reach2,
+            rise_off,
+            fall_off,
+        } = self;
+        *batch_key = Some(key);
+        index.clear();
+        index.extend(list.map(|j| j as u32));
+        let n = index.len();
+        // Padding lanes never reach a pixel (d^2 >= -1 always).
+        let padded = n.div_ceil(LANES) * LANES;
+        for v in pos
             .iter_mut()
-            .chain(&mut self.normal)
-            .chain(&mut self.intensity)
-            .chain([
-                &mut self.iso,
-                &mut self.inv_radius,
-                &mut self.reach2,
-                &mut self.rise_off,
-                &mut self.fall_off,
-            ])
+            .chain(normal.iter_mut())
+            .chain(intensity.iter_mut())
+            .chain([&mut *iso, &mut *inv_radius, &mut *rise_off, &mut *fall_off])
         {
             v.clear();
+            v.resize(padded, 0.0);
         }
-        for j in list {
-            let pl = &packed[j];
-            self.index.push(j as u32);
-            self.level.push(pl.level);
-            for a in 0..3 {
-                self.pos[a].push(pl.position[a]);
-                self.normal[a].push(pl.normal[a]);
-                self.intensity[a].push(pl.intensity[a]);
-            }
-            self.iso.push(pl.iso);
-            self.inv_radius.push(pl.radius.recip());
-            self.reach2.push(pl.reach2);
-            let (rise_off, fall_off) = match pl.role {
+        reach2.clear();
+        reach2.resize(padded, -1.0);
+        level.clear();
+        level.resize(n, 0);
+        let [px, py, pz] = pos.each_mut().map(|v| &mut v[..]);
+        let [mx, my, mz] = normal.each_mut().map(|v| &mut v[..]);
+        let [ir, ig, ib] = intensity.each_mut().map(|v| &mut v[..]);
+        let (iso, inv_radius, reach2) = (&mut iso[..], &mut inv_radius[..], &mut reach2[..]);
+        let (rise_off, fall_off, level) = (&mut rise_off[..], &mut fall_off[..], &mut level[..]);
+        for (e, &j) in index.iter().enumerate() {
+            let pl = &packed[j as usize];
+            (px[e], py[e], pz[e]) = pl.position.into();
+            (mx[e], my[e], mz[e]) = pl.normal.into();
+            (ir[e], ig[e], ib[e]) = pl.intensity.into();
+            iso[e] = pl.iso;
+            inv_radius[e] = pl.radius.recip();
+            reach2[e] = pl.reach2;
+            (rise_off[e], fall_off[e]) = match pl.role {
                 LevelRole::Only => (1.0, 1.0),
                 LevelRole::Lowest => (1.0, 0.0),
                 LevelRole::Middle => (0.0, 0.0),
                 LevelRole::Top => (0.0, 1.0),
             };
-            self.rise_off.push(rise_off);
-            self.fall_off.push(fall_off);
+            level[e] = pl.level;
         }
-        // Padding lanes never reach a pixel (d^2 >= -1 always).
-        let padded = self.chunks() * LANES;
-        for v in self
-            .pos
-            .iter_mut()
-            .chain(&mut self.normal)
-            .chain(&mut self.intensity)
-        {
-            v.resize(padded, 0.0);
-        }
-        for v in [
-            &mut self.iso,
-            &mut self.inv_radius,
-            &mut self.rise_off,
-            &mut self.fall_off,
-        ] {
-            v.resize(padded, 0.0);
-        }
-        self.reach2.resize(padded, -1.0);
     }
 
     /// Evaluates lights `LANES * chunk ..` for the pixel at `x` with normal `n`: the reach
