@@ -412,7 +412,8 @@ fn trace_band(
             }
             let (xp, ng) = (g.position[i], g.geo_normal[i]);
             let (mut s, mut u) = (Vec3::ZERO, Vec3::ZERO);
-            let mut rng = Rng::new(&[seed, i as u64, STREAM_JITTER]);
+            // Created on first use: representatives need no jitter (and no hashing).
+            let mut rng: Option<Rng> = None;
             let mut rays = 0;
             for r in reservoirs.pixel(i) {
                 let Some(sample) = r.sample else { continue };
@@ -421,6 +422,7 @@ fn trace_band(
                 let q = if sample.jitter == Vec3::ZERO {
                     sample.q
                 } else {
+                    let rng = rng.get_or_insert_with(|| Rng::new(&[seed, i as u64, STREAM_JITTER]));
                     let t = Vec3::new(
                         raised_cosine(halves(rng.next_u32())),
                         raised_cosine(halves(rng.next_u32())),
