@@ -89,7 +89,9 @@ pub struct LghSettings {
     pub construction: Construction,
     /// Build six hierarchies, one per dominant normal direction of the VPLs, instead of one
     /// (`--normal-bins`; an extension, not in the paper: grid lights then average only
-    /// normals that roughly agree, which loses less light in rooms).
+    /// normals that roughly agree). It helps the mean-normal emission, which loses light in
+    /// rooms, but not the default one: Cornell box, 640x360, 100K VPLs, alpha 1, unshadowed,
+    /// rel_rmse 0.32 (bias +15%) with six hierarchies against 0.155 with one.
     pub normal_bins: bool,
     /// Directional emission model of grid lights (`--grid-emission`).
     pub emission: GridEmission,
