@@ -482,7 +482,8 @@ fn shade_row(
         ..
     } = *ctx;
     let w = g.width as usize;
-    for (x, px) in row.iter_mut().enumerate() {
+    let keys = bins.row_keys(y as u32, w as u32);
+    for ((x, px), (phase, key)) in row.iter_mut().enumerate().zip(keys) {
         let i = y * w + x;
         if !g.is_hit(i) {
             continue;
@@ -491,12 +492,10 @@ fn shade_row(
         let mut rng = Rng::new(&[seed, i as u64, STREAM_LGH]);
         let (a, overdraw) = px;
         let res = layout.pixel_mut(row_res, x);
-        let (xu, yu) = (x as u32, y as u32);
         // The batch of this pixel's tile (one per sub-image column phase).
-        let batch = &mut batches[x % ctx.phases];
-        let key = bins.tile_key(xu, yu);
+        let batch = &mut batches[phase];
         if batch.key != Some(key) {
-            batch.fill(key, packed, bins.lights_at(xu, yu));
+            batch.fill(key, packed, bins.lights_at(x as u32, y as u32));
         }
         let batch = &*batch;
         for chunk in 0..batch.chunks() {

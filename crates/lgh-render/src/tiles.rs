@@ -227,6 +227,34 @@ impl InterleavedBins {
         (s, self.bins[s].tile_index(x, y))
     }
 
+    /// For pixels (0, y), (1, y), ... (`width` of them): the sub-image column phase x mod n
+    /// and [`InterleavedBins::tile_key`], found by counting instead of four integer
+    /// divisions per pixel (the lighting loop asks for every pixel).
+    pub fn row_keys(&self, y: u32, width: u32) -> impl Iterator<Item = (usize, (usize, usize))> {
+        let n = self.n.max(1);
+        // Every sub-image's bins have the same full-resolution tile and tiles per row.
+        let (tile, tiles_x) = self
+            .bins
+            .first()
+            .map_or((1, 0), |b| (b.tile.max(1), b.tiles_x));
+        let s0 = ((y % n) * n) as usize;
+        let row_base = ((y / tile) * tiles_x) as usize;
+        // (x mod n, x mod tile, x / tile)
+        (0..width).scan((0u32, 0u32, 0usize), move |(phase, in_tile, tx), _| {
+            let out = (*phase as usize, (s0 + *phase as usize, row_base + *tx));
+            *phase += 1;
+            if *phase == n {
+                *phase = 0;
+            }
+            *in_tile += 1;
+            if *in_tile == tile {
+                *in_tile = 0;
+                *tx += 1;
+            }
+            Some(out)
+        })
+    }
+
     /// The global indices of the lights listed for full-resolution pixel (x, y) in its
     /// sub-image's tile.
     #[inline]
@@ -244,6 +272,44 @@ impl InterleavedBins {
 mod tests {
     use super::*;
     use lgh_scene::camera::Camera;
+
+    /// The counted row keys are the tile keys, for every interleaving and a width that is
+    /// not a multiple of the tile.
+    #[test]
+    fn row_keys_are_the_tile_keys() {
+        let (w, h) = (37u32, 11u32);
+        let n_px = (w * h) as usize;
+        let g = GBuffer {
+            width: w,
+            height: h,
+            position: vec![Vec3::ZERO; n_px],
+            normal: vec![Vec3::Z; n_px],
+            geo_normal: vec![Vec3::Z; n_px],
+            albedo: vec![Vec3::ONE; n_px],
+            depth: vec![1.0; n_px],
+            emission: vec![Vec3::ZERO; n_px],
+        };
+        let camera = Camera {
+            position: Vec3::new(0.0, 0.0, 5.0),
+            look_at: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y_degrees: 40.0,
+        };
+        let frame = camera.frame(w, h);
+        for (n, tile) in [(1u32, 16u32), (2, 3), (4, 4), (4, 1)] {
+            let sub: Vec<u16> = (0..20).map(|i| (i % (n * n)) as u16).collect();
+            let centres = vec![Vec3::ZERO; sub.len()];
+            let radii = vec![1.0; sub.len()];
+            let bins = InterleavedBins::build(&g, &frame, tile, n, &centres, &radii, &sub);
+            for y in 0..h {
+                let keys: Vec<_> = bins.row_keys(y, w).collect();
+                let expected: Vec<_> = (0..w)
+                    .map(|x| ((x % n) as usize, bins.tile_key(x, y)))
+                    .collect();
+                assert_eq!(keys, expected, "n {n}, tile {tile}, row {y}");
+            }
+        }
+    }
 
     /// Every light belongs to exactly one sub-image: over the n^2 pixels of one interleaving
     /// block, lights of infinite radius (listed everywhere) are each seen exactly once.
