@@ -178,6 +178,20 @@ pub fn filter_ratio_pair_with(
     params: &AtrousParams,
     buffers: &mut AtrousBuffers,
 ) -> (Vec<Vec3>, Vec<Vec3>) {
+    let (mut s, mut u) = (s.to_vec(), u.to_vec());
+    filter_ratio_pair_in_place(&mut s, &mut u, g, params, buffers);
+    (s, u)
+}
+
+/// [`filter_ratio_pair_with`] in place: `s` and `u` become the filtered images (a renderer
+/// that no longer needs the unfiltered ones saves two image-sized buffers).
+pub fn filter_ratio_pair_in_place(
+    s: &mut [Vec3],
+    u: &mut [Vec3],
+    g: &GBuffer,
+    params: &AtrousParams,
+    buffers: &mut AtrousBuffers,
+) {
     let (w, h) = (g.width as usize, g.height as usize);
     let passes = params.passes.min(12);
     let pad = 2 << passes.saturating_sub(1);
@@ -283,10 +297,8 @@ pub fn filter_ratio_pair_with(
         std::mem::swap(&mut cur, &mut next);
     }
     // Pixels that see nothing keep their input values.
-    let (mut s_out, mut u_out) = (s.to_vec(), u.to_vec());
-    s_out
-        .par_chunks_mut(w)
-        .zip(u_out.par_chunks_mut(w))
+    s.par_chunks_mut(w)
+        .zip(u.par_chunks_mut(w))
         .enumerate()
         .for_each(|(y, (s_row, u_row))| {
             let at = |c: usize, x: usize| cur[c * plane + y * layout.stride + pad + x];
@@ -295,7 +307,6 @@ pub fn filter_ratio_pair_with(
                 u_row[x] = Vec3::new(at(3, x), at(4, x), at(5, x));
             }
         });
-    (s_out, u_out)
 }
 
 /// `LANES` values of `s` from `b` on.

@@ -24,7 +24,7 @@ use lgh_core::rng::Rng;
 use lgh_core::sampling::raised_cosine;
 use rayon::prelude::*;
 
-use crate::atrous::{AtrousBuffers, AtrousParams, filter_ratio_pair_with};
+use crate::atrous::{AtrousBuffers, AtrousParams, filter_ratio_pair_in_place};
 use crate::frame::Timings;
 use crate::gbuffer::GBuffer;
 use crate::interleave::{self, BlurParams};
@@ -492,7 +492,9 @@ pub fn shadowed_indirect(
                 passes: settings.filter_passes,
                 ..AtrousParams::lgh_defaults(world.radius)
             };
-            filter_ratio_pair_with(&s_hat, &u_hat, g, &params, buffers)
+            let (mut s, mut u) = (s_hat, u_hat);
+            filter_ratio_pair_in_place(&mut s, &mut u, g, &params, buffers);
+            (s, u)
         } else {
             (s_hat, u_hat)
         }
