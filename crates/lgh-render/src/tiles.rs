@@ -271,13 +271,11 @@ impl InterleavedBins {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use lgh_scene::camera::Camera;
+    use lgh_scene::camera::{Camera, CameraFrame};
 
-    /// The counted row keys are the tile keys, for every interleaving and a width that is
-    /// not a multiple of the tile.
-    #[test]
-    fn row_keys_are_the_tile_keys() {
-        let (w, h) = (37u32, 11u32);
+    /// A `w` x `h` G-buffer that sees a plane at depth 1 everywhere, and a camera on the z
+    /// axis looking at the origin.
+    fn flat_view(w: u32, h: u32) -> (GBuffer, CameraFrame) {
         let n_px = (w * h) as usize;
         let g = GBuffer {
             width: w,
@@ -295,7 +293,15 @@ mod tests {
             up: Vec3::Y,
             fov_y_degrees: 40.0,
         };
-        let frame = camera.frame(w, h);
+        (g, camera.frame(w, h))
+    }
+
+    /// The counted row keys are the tile keys, for every interleaving and a width that is
+    /// not a multiple of the tile.
+    #[test]
+    fn row_keys_are_the_tile_keys() {
+        let (w, h) = (37u32, 11u32);
+        let (g, frame) = flat_view(w, h);
         for (n, tile) in [(1u32, 16u32), (2, 3), (4, 4), (4, 1)] {
             let sub: Vec<u16> = (0..20).map(|i| (i % (n * n)) as u16).collect();
             let centres = vec![Vec3::ZERO; sub.len()];
@@ -316,24 +322,7 @@ mod tests {
     #[test]
     fn interleaved_bins_list_every_light_in_exactly_one_sub_image() {
         let (w, h) = (16u32, 8u32);
-        let n_px = (w * h) as usize;
-        let g = GBuffer {
-            width: w,
-            height: h,
-            position: vec![Vec3::ZERO; n_px],
-            normal: vec![Vec3::Z; n_px],
-            geo_normal: vec![Vec3::Z; n_px],
-            albedo: vec![Vec3::ONE; n_px],
-            depth: vec![1.0; n_px],
-            emission: vec![Vec3::ZERO; n_px],
-        };
-        let camera = Camera {
-            position: Vec3::new(0.0, 0.0, 5.0),
-            look_at: Vec3::ZERO,
-            up: Vec3::Y,
-            fov_y_degrees: 40.0,
-        };
-        let frame = camera.frame(w, h);
+        let (g, frame) = flat_view(w, h);
         let count = 37;
         let centres: Vec<Vec3> = (0..count).map(|i| Vec3::splat(i as f32 * 0.01)).collect();
         let radii = vec![f32::INFINITY; count];
