@@ -610,14 +610,15 @@ pub fn render_lgh(
     let builder = &mut memory.grid;
     let mut t = Timings::default();
     let n_px = g.len();
-    let mut out = LghOutput {
-        indirect: par_filled(n_px, Vec3::ZERO),
-        overdraw: par_filled(n_px, 0),
-        ..LghOutput::default()
-    };
     if vpls.is_empty() {
-        return Ok(out);
+        return Ok(LghOutput {
+            indirect: par_filled(n_px, Vec3::ZERO),
+            overdraw: par_filled(n_px, 0),
+            ..LghOutput::default()
+        });
     }
+    // Every image of the output is set by the passes below.
+    let mut out = LghOutput::default();
     // One hierarchy, or one per dominant normal direction (--normal-bins).
     let split;
     let groups: Vec<&Vpls> = if settings.normal_bins {
