@@ -9,7 +9,7 @@ use glam::Vec3;
 use lgh_core::lighting_grid::synthetic::lights_on_surfaces;
 use lgh_core::lighting_grid::{Construction, GridBuilder, InputLights, LevelCount};
 use lgh_render::World;
-use lgh_render::vpl_gen::generate_vpls;
+use lgh_render::vpl_gen::{PathNumbers, generate_vpls};
 
 use crate::scene_arg::load_scene;
 
@@ -89,7 +89,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
     for &n in &args.lights {
         let input = match &world {
             Some(w) => {
-                let set = generate_vpls(w, n, 3, 0);
+                let set = generate_vpls(w, n, 3, 0, PathNumbers::Sobol);
                 Input {
                     intensity: set.vpls.flux.clone(),
                     positions: set.vpls.positions,

@@ -7,7 +7,7 @@ use anyhow::Result;
 use clap::Args;
 use lgh_render::gbuffer::GBuffer;
 use lgh_render::lgh::{LghSettings, render_lgh};
-use lgh_render::vpl_gen::generate_vpls;
+use lgh_render::vpl_gen::{PathNumbers, generate_vpls};
 use lgh_render::{FrameMemory, World};
 
 use crate::render_cmd::parse_size;
@@ -60,7 +60,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
     let mut rows = Vec::new();
     for &n in &args.vpls {
         let t = Instant::now();
-        let set = generate_vpls(&world, n, 3, 0);
+        let set = generate_vpls(&world, n, 3, 0, PathNumbers::Sobol);
         let vpl_ms = t.elapsed().as_secs_f64() * 1e3;
         let mut memory = FrameMemory::default();
         let mut per_k = serde_json::Map::new();

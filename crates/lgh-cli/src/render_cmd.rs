@@ -14,6 +14,7 @@ use lgh_render::pt::PtSettings;
 use lgh_render::sequence::Sequence;
 use lgh_render::slc::SlcSettings;
 use lgh_render::temporal::{TemporalSettings, TemporalTarget};
+use lgh_render::vpl_gen::PathNumbers;
 use lgh_render::{Component, Method, RenderSettings, World, render_frame};
 
 use crate::progress_bar::Bars;
@@ -42,6 +43,16 @@ pub enum MethodArg {
     PtUniform,
     /// Path tracing with clamped light ranges (biased baseline).
     PtClamped,
+}
+
+/// Numbers of the light paths that make the VPLs.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum PathNumbersArg {
+    /// Path k uses point k of a per-frame scrambled Sobol sequence: the VPLs of one frame
+    /// spread more evenly, so the indirect light changes less between frames.
+    Sobol,
+    /// Independent random numbers per path (plain Monte Carlo).
+    Random,
 }
 
 /// Shadow filters.
@@ -132,6 +143,9 @@ pub struct RenderArgs {
     /// Maximum VPLs per light path, i.e. indirect bounces represented (1 = one bounce).
     #[arg(long, default_value_t = 3)]
     pub bounces: u32,
+    /// Numbers that drive the light paths (both unbiased; `sobol` is stratified).
+    #[arg(long, value_enum, default_value = "sobol")]
+    pub path_numbers: PathNumbersArg,
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "640x360", value_parser = parse_size)]
     pub size: (u32, u32),
@@ -515,6 +529,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         vpls: args.vpls,
         bounces: args.bounces,
         seed: args.seed,
+        path_numbers: match args.path_numbers {
+            PathNumbersArg::Sobol => PathNumbers::Sobol,
+            PathNumbersArg::Random => PathNumbers::Random,
+        },
         area_samples: args.area_samples,
         method: match args.method {
             MethodArg::Brute => Method::Brute,
@@ -571,6 +589,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             "vpls_requested": settings.vpls,
             "light_paths": frame.vpls.paths,
             "bounces": settings.bounces,
+            "path_numbers": format!("{:?}", settings.path_numbers).to_lowercase(),
             "method": settings.method.name(),
             "seed": settings.seed,
             "threads": threads,

@@ -6,6 +6,7 @@
 //! | module | what it holds | paper |
 //! | --- | --- | --- |
 //! | [`rng`] | counter-based random numbers (deterministic whatever the thread count) | - |
+//! | [`qmc`] | Owen-scrambled Sobol points for light paths, and the [`qmc::Sampler`] trait | Burley 2020 |
 //! | [`sampling`] | warps (cosine hemisphere, triangle, raised cosine) and a discrete distribution | - |
 //! | [`color`] | luminance and RGB helpers | - |
 //! | [`vpl`] | virtual point lights, stored structure-of-arrays | Keller 1997; LGH 2019 section 3 |
@@ -27,6 +28,7 @@ pub mod blending;
 pub mod color;
 pub mod light_range;
 pub mod lighting_grid;
+pub mod qmc;
 pub mod reservoir;
 pub mod rng;
 pub mod sampling;

@@ -105,6 +105,9 @@ pub fn raised_cosine(u: Vec2) -> f32 {
     }
 }
 
+/// The largest f32 below 1: uniform numbers are kept in [0, 1).
+pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
 /// A discrete distribution over n items with probabilities proportional to non-negative
 /// weights, sampled by binary search in its cumulative table.
 #[derive(Clone, Debug, Default)]
@@ -158,12 +161,28 @@ impl Distribution1D {
     /// Items of zero weight are never picked.
     #[must_use]
     pub fn sample(&self, u: f32) -> (usize, f32) {
+        let (i, p, _) = self.sample_remapped(u);
+        (i, p)
+    }
+
+    /// Like [`Self::sample`], and also returns where `u` fell inside the picked item's
+    /// interval, rescaled to [0, 1): a fresh uniform number that keeps the stratification of
+    /// `u`, for the next choice (for example the point on the picked light).
+    #[must_use]
+    pub fn sample_remapped(&self, u: f32) -> (usize, f32, f32) {
         let target = u as f64 * self.total;
         let i = self
             .cdf
             .partition_point(|&c| c <= target)
             .min(self.cdf.len() - 1);
-        (i, self.pmf(i))
+        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        let width = self.cdf[i] - lo;
+        let rest = if width > 0.0 {
+            ((target - lo) / width).clamp(0.0, 1.0) as f32
+        } else {
+            0.0
+        };
+        (i, self.pmf(i), rest.min(ONE_MINUS_EPSILON))
     }
 }
 
@@ -256,5 +275,27 @@ mod tests {
             .sum();
         assert!(chi2 < 25.0, "chi2 {chi2}");
         assert!(Distribution1D::new(&[0.0, f32::NAN]).is_none());
+    }
+
+    /// Evenly spaced u give evenly spaced remainders inside each picked item: the remainder is
+    /// again uniform, and the item choice agrees with `sample`.
+    #[test]
+    fn remapped_remainder_is_uniform_within_each_item() {
+        let d = Distribution1D::new(&[1.0, 0.0, 3.0]).unwrap();
+        let mut rests = [Vec::new(), Vec::new(), Vec::new()];
+        for j in 0..4000 {
+            let u = (j as f32 + 0.5) / 4000.0;
+            let (i, p, rest) = d.sample_remapped(u);
+            assert_eq!((i, p), d.sample(u));
+            assert!((0.0..1.0).contains(&rest));
+            rests[i].push(rest);
+        }
+        assert!(rests[1].is_empty());
+        for r in [&rests[0], &rests[2]] {
+            for (j, &v) in r.iter().enumerate() {
+                let expected = (j as f32 + 0.5) / r.len() as f32;
+                assert!((v - expected).abs() < 1e-3, "{v} vs {expected}");
+            }
+        }
     }
 }

@@ -25,7 +25,7 @@ use crate::progress::Progress;
 use crate::pt::{LightSampling, PtSettings, render_pt};
 use crate::ratio::ShadowRatio;
 use crate::slc::{RangeMode, SlcSettings, render_slc};
-use crate::vpl_gen::{VplSet, generate_vpls};
+use crate::vpl_gen::{PathNumbers, VplSet, generate_vpls};
 use crate::world::World;
 use lgh_scene::camera::CameraFrame;
 
@@ -102,6 +102,8 @@ pub struct RenderSettings {
     pub bounces: u32,
     /// Seed of every random choice.
     pub seed: u64,
+    /// Numbers of the light paths that make the VPLs (stratified by default).
+    pub path_numbers: PathNumbers,
     /// Shadow-ray samples per pixel for area lights in the direct pass.
     pub area_samples: u32,
     /// Indirect-lighting method.
@@ -127,6 +129,7 @@ impl Default for RenderSettings {
             vpls: 10_000,
             bounces: 3,
             seed: 0,
+            path_numbers: PathNumbers::Sobol,
             area_samples: 16,
             method: Method::Brute,
             component: Component::All,
@@ -292,7 +295,7 @@ pub fn render_frame_with(
         return Ok(path_traced_frame(world, s, g, t, start, progress));
     }
     let vpls = t.time("vpl_generation", || {
-        generate_vpls(world, s.vpls, s.bounces, s.seed)
+        generate_vpls(world, s.vpls, s.bounces, s.seed, s.path_numbers)
     });
     // The indirect component alone does not need the direct pass (about a third of a
     // 1280x720 frame).

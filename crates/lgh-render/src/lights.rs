@@ -5,7 +5,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 use lgh_core::color::luminance;
-use lgh_core::rng::Rng;
+use lgh_core::qmc::Sampler;
 use lgh_core::sampling::{
     Distribution1D, concentric_disk, cosine_hemisphere, orthonormal_basis, uniform_cone,
     uniform_sphere, uniform_triangle,
@@ -166,11 +166,19 @@ impl LightSet {
 
     /// Starts a light path: picks a light in proportion to its power, then a point and a
     /// direction on it. `None` if the scene emits nothing.
+    ///
+    /// The numbers are drawn in a fixed order, so that with a [`lgh_core::qmc::PathSampler`]
+    /// the two 2D choices that place a path (the point on an area light or a punctual light's
+    /// direction, then an area light's direction) fill one stratified 4D group; the light is
+    /// picked with the first number, whose remainder inside the picked light's interval then
+    /// serves as the first coordinate of the point, so the choice does not break the strata.
     #[must_use]
-    pub fn sample_emission(&self, rng: &mut Rng) -> Option<EmittedRay> {
+    pub fn sample_emission(&self, rng: &mut impl Sampler) -> Option<EmittedRay> {
         let dist = self.by_power.as_ref()?;
-        let (i, p_light) = dist.sample(rng.next_f32());
         let u = rng.next_2d();
+        let u_dir = rng.next_2d();
+        let (i, p_light, u_x) = dist.sample_remapped(u.x);
+        let u = Vec2::new(u_x, u.y);
         let ray = match self.punctual.get(i) {
             Some(Light::Point {
                 position,
@@ -214,7 +222,7 @@ impl LightSet {
                 let p = e.v0 + e.e1 * b.x + e.e2 * b.y;
                 EmittedRay {
                     origin: p + e.normal * (1e-4 * self.radius),
-                    dir: cosine_hemisphere(e.normal, rng.next_2d()),
+                    dir: cosine_hemisphere(e.normal, u_dir),
                     flux: e.radiance * (PI * e.area),
                 }
             }

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use glam::Vec3;
 use lgh_render::World;
-use lgh_render::vpl_gen::generate_vpls;
+use lgh_render::vpl_gen::{PathNumbers, generate_vpls};
 
 fn world(rho: f32, intensity: f32) -> World {
     let mut s = common::furnace_scene(rho, Vec3::splat(intensity));
@@ -20,7 +20,7 @@ fn world(rho: f32, intensity: f32) -> World {
 fn one_bounce_carries_exactly_p_rho() {
     let w = world(0.5, 2.0);
     let p = 4.0 * std::f64::consts::PI * 2.0;
-    let set = generate_vpls(&w, 5000, 1, 1);
+    let set = generate_vpls(&w, 5000, 1, 1, PathNumbers::Sobol);
     assert_eq!(set.vpls.len(), 5000);
     assert_eq!(set.paths, 5000);
     let total = set.vpls.total_flux().x as f64;
@@ -36,7 +36,12 @@ fn multi_bounce_energy_is_a_geometric_series() {
     let p = 4.0 * std::f64::consts::PI;
     for (bounces, expected) in [(2u32, rho + rho * rho), (3, rho + rho * rho + rho.powi(3))] {
         let totals: Vec<f64> = (0..24)
-            .map(|seed| generate_vpls(&w, 4000, bounces, seed).vpls.total_flux().y as f64)
+            .map(|seed| {
+                generate_vpls(&w, 4000, bounces, seed, PathNumbers::Sobol)
+                    .vpls
+                    .total_flux()
+                    .y as f64
+            })
             .collect();
         let (m, s) = common::mean_std(&totals);
         let se = s / (totals.len() as f64).sqrt();
