@@ -11,6 +11,7 @@ use lgh_core::lighting_grid::{Construction, GridBuilder, InputLights, LevelCount
 use lgh_render::World;
 use lgh_render::vpl_gen::{PathNumbers, generate_vpls};
 
+use crate::bench_cmd::median;
 use crate::scene_arg::load_scene;
 
 /// Arguments of `lgh bench build`.
@@ -46,11 +47,6 @@ struct Input {
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
     intensity: Vec<Vec3>,
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    if v.is_empty() { 0.0 } else { v[v.len() / 2] }
 }
 
 /// Peak resident memory since the last reset, in bytes (Linux; `None` elsewhere).

@@ -10,6 +10,12 @@ use lgh_render::raybench::bench_rays;
 
 use crate::scene_arg::load_scene;
 
+/// The median of timed runs (the upper one of an even count; 0 for none).
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() { 0.0 } else { v[v.len() / 2] }
+}
+
 /// Measure performance.
 #[derive(Debug, Args)]
 pub struct BenchArgs {

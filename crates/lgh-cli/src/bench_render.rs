@@ -5,11 +5,13 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clap::Args;
+use lgh_core::timing::Timings;
 use lgh_render::gbuffer::GBuffer;
 use lgh_render::lgh::{LghSettings, render_lgh};
 use lgh_render::vpl_gen::{PathNumbers, generate_vpls};
 use lgh_render::{FrameMemory, World};
 
+use crate::bench_cmd::median;
 use crate::render_cmd::parse_size;
 use crate::scene_arg::load_scene;
 
@@ -35,6 +37,9 @@ pub struct RenderBenchArgs {
     /// Table 3 compares 1, 2 and 4). Table 2 is without interleaving.
     #[arg(long, value_delimiter = ',', default_value = "1")]
     pub interleave: Vec<u32>,
+    /// Frames rendered per configuration; every time reported is the median over them.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub runs: u32,
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
@@ -77,20 +82,37 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
                 interleave: n,
                 ..LghSettings::default()
             };
-            let start = Instant::now();
-            let out = render_lgh(
-                &world,
-                &g,
-                &frame,
-                &set.vpls,
-                eps,
-                &settings,
-                0,
-                k > 0,
-                &mut memory,
-            )?;
-            let total = start.elapsed().as_secs_f64() * 1e3;
-            let get = |name: &str| out.timings.get(name).unwrap_or(0.0);
+            let mut samples: Vec<(Timings, f64)> = Vec::new();
+            let mut last = None;
+            for _ in 0..args.runs {
+                let start = Instant::now();
+                let out = render_lgh(
+                    &world,
+                    &g,
+                    &frame,
+                    &set.vpls,
+                    eps,
+                    &settings,
+                    0,
+                    k > 0,
+                    &mut memory,
+                )?;
+                let total = start.elapsed().as_secs_f64() * 1e3;
+                samples.push((
+                    out.timings.clone(),
+                    total - out.timings.get("lgh_build").unwrap_or(0.0),
+                ));
+                last = Some(out);
+            }
+            let Some(out) = last else { continue };
+            let get = |name: &str| {
+                median(
+                    samples
+                        .iter()
+                        .map(|(t, _)| t.get(name).unwrap_or(0.0))
+                        .collect(),
+                )
+            };
             build_ms = get("lgh_build");
             per_k.insert(
                 run_key(k, n),
@@ -102,7 +124,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
                     "interleave_blur_ms": get("interleave_blur"),
                     "shadow_filter_ms": get("shadow_filter"),
                     "composite_ms": get("composite"),
-                    "render_ms": total - build_ms,
+                    "render_ms": median(samples.iter().map(|s| s.1).collect()),
                     "avg_overdraw": out.avg_overdraw(&g),
                     "grid_lights": out.grid_lights,
                     "levels": out.levels,

@@ -304,6 +304,8 @@ fn lgh_render_writes_stats_and_heatmap_and_bench_render_reports_tables() {
         "32x24",
         "--interleave",
         "1,4",
+        "--runs",
+        "2",
         "--json",
     ]);
     assert!(
@@ -328,6 +330,7 @@ fn lgh_render_writes_stats_and_heatmap_and_bench_render_reports_tables() {
         &lgh(&["bench", "render", "--interleave", "0"]),
         &["--interleave"],
     );
+    assert_error(&lgh(&["bench", "render", "--runs", "0"]), &["--runs"]);
     assert_error(
         &lgh(&["render", "--method", "lgh", "--alpha=-1"]),
         &["--alpha"],

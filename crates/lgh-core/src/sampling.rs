@@ -161,8 +161,19 @@ impl Distribution1D {
     /// Items of zero weight are never picked.
     #[must_use]
     pub fn sample(&self, u: f32) -> (usize, f32) {
-        let (i, p, _) = self.sample_remapped(u);
-        (i, p)
+        let (i, _) = self.find(u);
+        (i, self.pmf(i))
+    }
+
+    /// The item whose cumulative interval holds `u` times the total, and that point.
+    #[inline]
+    fn find(&self, u: f32) -> (usize, f64) {
+        let target = u as f64 * self.total;
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= target)
+            .min(self.cdf.len() - 1);
+        (i, target)
     }
 
     /// Like [`Self::sample`], and also returns where `u` fell inside the picked item's
@@ -170,11 +181,7 @@ impl Distribution1D {
     /// `u`, for the next choice (for example the point on the picked light).
     #[must_use]
     pub fn sample_remapped(&self, u: f32) -> (usize, f32, f32) {
-        let target = u as f64 * self.total;
-        let i = self
-            .cdf
-            .partition_point(|&c| c <= target)
-            .min(self.cdf.len() - 1);
+        let (i, target) = self.find(u);
         let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
         let width = self.cdf[i] - lo;
         let rest = if width > 0.0 {
