@@ -33,27 +33,44 @@ impl GBuffer {
     /// Traces one primary ray per pixel centre, in parallel.
     #[must_use]
     pub fn render(world: &World, frame: &CameraFrame, width: u32, height: u32) -> Self {
-        let (w, n) = (width as usize, width as usize * height as usize);
         let mut g = Self {
-            width,
-            height,
-            position: par_filled(n, Vec3::ZERO),
-            normal: par_filled(n, Vec3::ZERO),
-            geo_normal: par_filled(n, Vec3::ZERO),
-            albedo: par_filled(n, Vec3::ZERO),
-            depth: par_filled(n, f32::INFINITY),
-            emission: par_filled(n, Vec3::ZERO),
+            width: 0,
+            height: 0,
+            position: Vec::new(),
+            normal: Vec::new(),
+            geo_normal: Vec::new(),
+            albedo: Vec::new(),
+            depth: Vec::new(),
+            emission: Vec::new(),
         };
+        g.render_into(world, frame, width, height);
+        g
+    }
+
+    /// [`GBuffer::render`] into this buffer's planes, reusing their memory when the pixel
+    /// count is unchanged (as a real-time renderer reuses its render targets): every pixel is
+    /// written, so nothing is cleared first. Fresh planes are allocated in parallel.
+    pub fn render_into(&mut self, world: &World, frame: &CameraFrame, width: u32, height: u32) {
+        let (w, n) = (width as usize, width as usize * height as usize);
+        (self.width, self.height) = (width, height);
+        if self.depth.len() != n {
+            self.position = par_filled(n, Vec3::ZERO);
+            self.normal = par_filled(n, Vec3::ZERO);
+            self.geo_normal = par_filled(n, Vec3::ZERO);
+            self.albedo = par_filled(n, Vec3::ZERO);
+            self.depth = par_filled(n, f32::INFINITY);
+            self.emission = par_filled(n, Vec3::ZERO);
+        }
         // Each row writes its pixels straight into the planes: no per-pixel hit records
         // gathered first (80 B a pixel) and no serial copy after.
         let row = w.max(1);
         (
-            g.position.par_chunks_mut(row),
-            g.normal.par_chunks_mut(row),
-            g.geo_normal.par_chunks_mut(row),
-            g.albedo.par_chunks_mut(row),
-            g.depth.par_chunks_mut(row),
-            g.emission.par_chunks_mut(row),
+            self.position.par_chunks_mut(row),
+            self.normal.par_chunks_mut(row),
+            self.geo_normal.par_chunks_mut(row),
+            self.albedo.par_chunks_mut(row),
+            self.depth.par_chunks_mut(row),
+            self.emission.par_chunks_mut(row),
         )
             .into_par_iter()
             .enumerate()
@@ -61,7 +78,14 @@ impl GBuffer {
                 |(y, (position, normal, geo_normal, albedo, depth, emission))| {
                     for x in 0..position.len() {
                         let px = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                        let Some(s) = world.trace(frame.origin, frame.direction(px)) else {
+                        let hit = world.trace(frame.origin, frame.direction(px));
+                        let Some(s) = hit else {
+                            position[x] = Vec3::ZERO;
+                            normal[x] = Vec3::ZERO;
+                            geo_normal[x] = Vec3::ZERO;
+                            albedo[x] = Vec3::ZERO;
+                            depth[x] = f32::INFINITY;
+                            emission[x] = Vec3::ZERO;
                             continue;
                         };
                         position[x] = s.position;
@@ -73,7 +97,6 @@ impl GBuffer {
                     }
                 },
             );
-        g
     }
 
     /// Number of pixels.
