@@ -54,13 +54,15 @@ fn run_one(
             seed: u64::from(f),
             ..base.clone()
         };
-        let frame = seq.render(world, &s, &Silent).map_err(|e| anyhow!("{e}"))?;
+        let mut frame = seq.render(world, &s, &Silent).map_err(|e| anyhow!("{e}"))?;
         ms += frame.timings.get("total").unwrap_or(0.0);
+        let current = std::mem::take(&mut frame.indirect.pixels);
         if let Some(p) = &prev {
-            sum += flicker(p, &frame.indirect.pixels);
+            sum += flicker(p, &current);
             n += 1;
         }
-        prev = Some(frame.indirect.pixels);
+        prev = Some(current);
+        seq.recycle(frame);
     }
     Ok((sum / f64::from(n.max(1)), ms / f64::from(frames.max(1))))
 }

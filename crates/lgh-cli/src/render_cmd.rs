@@ -460,6 +460,7 @@ fn run_sequence(
                 path.display()
             );
         }
+        seq.recycle(frame);
     }
     if let Some(path) = &args.stats {
         let v = serde_json::json!({

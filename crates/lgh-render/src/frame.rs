@@ -247,14 +247,26 @@ pub enum RenderError {
 }
 
 /// Working memory that frames reuse: the hierarchy builder's and the shadow filter's (about
-/// 90 MB at 1280x720). A renderer of frame after frame keeps one ([`render_frame_with`]), so
-/// that no frame pays for paging in fresh memory. A clone is empty: it is only a cache.
+/// 90 MB at 1280x720), and the G-buffer of a frame handed back with
+/// [`FrameMemory::recycle`]. A renderer of frame after frame keeps one
+/// ([`render_frame_with`]), so that no frame pays for paging in fresh memory. A clone is
+/// empty: it is only a cache.
 #[derive(Debug, Default)]
 pub struct FrameMemory {
     /// The lighting grid hierarchy builder.
     pub grid: GridBuilder,
     /// The a-trous filter's planes.
     pub filter: AtrousBuffers,
+    /// Planes for the next frame's G-buffer (1280x720: 57 MB, 13 ms of first touches).
+    pub gbuffer: Option<GBuffer>,
+}
+
+impl FrameMemory {
+    /// Takes back a frame that is no longer needed, so that the next frame renders its
+    /// G-buffer into the same planes.
+    pub fn recycle(&mut self, frame: Frame) {
+        self.gbuffer = Some(frame.gbuffer);
+    }
 }
 
 impl Clone for FrameMemory {
@@ -290,7 +302,13 @@ pub fn render_frame_with(
     let mut sub_timings = Vec::new();
     let (w, h) = (s.width, s.height);
     let camera = world.scene.camera().frame(w, h);
-    let g = t.time("gbuffer", || GBuffer::render(world, &camera, w, h));
+    let g = t.time("gbuffer", || match memory.gbuffer.take() {
+        Some(mut g) => {
+            g.render_into(world, &camera, w, h);
+            g
+        }
+        None => GBuffer::render(world, &camera, w, h),
+    });
     if s.method.is_path_tracer() {
         return Ok(path_traced_frame(world, s, g, t, start, progress));
     }

@@ -68,6 +68,14 @@ impl Sequence {
     }
 }
 
+impl Sequence {
+    /// Hands back a frame the caller is done with: the next frame reuses its memory
+    /// ([`FrameMemory::recycle`]).
+    pub fn recycle(&mut self, frame: Frame) {
+        self.memory.recycle(frame);
+    }
+}
+
 /// Flicker between two consecutive frames of a static view: the mean absolute difference
 /// of their luminance over the pixels, relative to the mean luminance of the later frame.
 #[must_use]

@@ -146,3 +146,27 @@ fn a_moving_object_sequence_is_deterministic_and_moves() {
         "only {changed} pixels changed"
     );
 }
+
+/// A frame handed back with `recycle` lends its G-buffer planes to the next frame, which must
+/// not change that frame, even after a frame of another size or a different view.
+#[test]
+fn recycled_frames_do_not_change_the_next_ones() {
+    let mut world = moving_light_world();
+    let mut seq = Sequence::new(None);
+    for (f, (w, h)) in [(64, 36), (64, 36), (40, 30), (64, 36)]
+        .into_iter()
+        .enumerate()
+    {
+        world.set_time(f as f32 * 0.7);
+        let s = RenderSettings {
+            width: w,
+            height: h,
+            ..settings(f as u64)
+        };
+        let frame = seq.render(&world, &s, &Silent).unwrap();
+        let fresh = lgh_render::render_frame(&world, &s, &Silent).unwrap();
+        assert_eq!(frame.image, fresh.image, "frame {f}");
+        assert_eq!(frame.gbuffer.depth, fresh.gbuffer.depth, "frame {f}");
+        seq.recycle(frame);
+    }
+}
