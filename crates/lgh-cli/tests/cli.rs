@@ -345,3 +345,22 @@ fn lgh_render_writes_stats_and_heatmap_and_bench_render_reports_tables() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn bench_temporal_reports_flicker_with_and_without_the_filter() {
+    let out = lgh(&[
+        "bench", "temporal", "--frames", "3", "--size", "32x18", "--vpls", "300", "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let without = v["flicker_without_taa"].as_f64().unwrap();
+    let with = v["flicker_with_taa"].as_f64().unwrap();
+    assert!(without > 0.0 && with > 0.0);
+    let reduction = v["reduction_with_taa"].as_f64().unwrap();
+    assert!((reduction - without / with).abs() < 1e-9 * reduction);
+    assert!(v["reduction_with_taa_indirect"].as_f64().unwrap() > 0.0);
+}
