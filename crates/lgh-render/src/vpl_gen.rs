@@ -10,10 +10,11 @@
 //! Light leaving the primary lights themselves is not stored: direct light is computed
 //! exactly, so VPLs carry only indirect light.
 //!
-//! By default ([`PathNumbers::Sobol`]) path `k` draws its numbers from the `k`-th point of a per-frame scrambled Sobol sequence
-//! ([`PathSampler`]), as Keller drew his from Halton points: the VPLs of one frame spread more
-//! evenly, which on the Cornell box makes the unshadowed indirect light flicker about 25% less
-//! from frame to frame when the VPLs are regenerated every frame, and the total flux vary far less.
+//! By default ([`PathNumbers::Sobol`]) path `k` draws its numbers from the `k`-th point of a
+//! per-frame scrambled Sobol sequence ([`PathSampler`]), as Keller drew his from Halton
+//! points: the VPLs of one frame spread more evenly, which on the Cornell box makes the
+//! unshadowed indirect light flicker about 25% less from frame to frame when the VPLs are
+//! regenerated every frame, and the total flux vary far less.
 
 use glam::Vec3;
 use lgh_core::qmc::{PathSampler, Sampler};
@@ -66,15 +67,14 @@ pub fn generate_vpls(
     if target == 0 || bounces == 0 || world.lights.is_empty() {
         return VplSet { vpls, paths };
     }
+    let sobol_seed = hash(&[seed, STREAM_VPL]);
     'batches: while paths < max_paths {
         let batch: Vec<Vec<(Vec3, Vec3, Vec3)>> = (paths..paths + BATCH)
             .into_par_iter()
             .map(|k| match numbers {
-                PathNumbers::Sobol => trace_path(
-                    world,
-                    bounces,
-                    &mut PathSampler::new(hash(&[seed, STREAM_VPL]), k),
-                ),
+                PathNumbers::Sobol => {
+                    trace_path(world, bounces, &mut PathSampler::new(sobol_seed, k))
+                }
                 PathNumbers::Random => {
                     trace_path(world, bounces, &mut Rng::new(&[seed, k, STREAM_VPL]))
                 }
