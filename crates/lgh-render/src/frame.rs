@@ -302,12 +302,10 @@ pub fn render_frame_with(
     let mut sub_timings = Vec::new();
     let (w, h) = (s.width, s.height);
     let camera = world.scene.camera().frame(w, h);
-    let g = t.time("gbuffer", || match memory.gbuffer.take() {
-        Some(mut g) => {
-            g.render_into(world, &camera, w, h);
-            g
-        }
-        None => GBuffer::render(world, &camera, w, h),
+    let g = t.time("gbuffer", || {
+        let mut g = memory.gbuffer.take().unwrap_or_default();
+        g.render_into(world, &camera, w, h);
+        g
     });
     if s.method.is_path_tracer() {
         return Ok(path_traced_frame(world, s, g, t, start, progress));

@@ -8,8 +8,9 @@ use crate::world::World;
 use lgh_scene::camera::CameraFrame;
 
 /// Per-pixel surface attributes, structure-of-arrays, row-major from the top-left pixel.
-/// Pixels that see nothing have `depth = f32::INFINITY` and zero everywhere else.
-#[derive(Clone, Debug)]
+/// Pixels that see nothing have `depth = f32::INFINITY` and zero everywhere else. The
+/// default is an empty 0 x 0 buffer, ready for [`GBuffer::render_into`].
+#[derive(Clone, Debug, Default)]
 pub struct GBuffer {
     /// Image width in pixels.
     pub width: u32,
@@ -33,16 +34,7 @@ impl GBuffer {
     /// Traces one primary ray per pixel centre, in parallel.
     #[must_use]
     pub fn render(world: &World, frame: &CameraFrame, width: u32, height: u32) -> Self {
-        let mut g = Self {
-            width: 0,
-            height: 0,
-            position: Vec::new(),
-            normal: Vec::new(),
-            geo_normal: Vec::new(),
-            albedo: Vec::new(),
-            depth: Vec::new(),
-            emission: Vec::new(),
-        };
+        let mut g = Self::default();
         g.render_into(world, frame, width, height);
         g
     }
