@@ -254,10 +254,10 @@ impl GridBuilder {
     /// The paper's rule (section 4.3): the largest l_max with |S_1| < N/2 (at least 1).
     /// |S_1| grows with l_max, so the search starts from a guess (for lights on surfaces
     /// |S_1| grows about 4x per level) and counts |S_1| there and at its neighbours without
-    /// building it ([`splat::count_vertices`]), then builds the S_1 of the level kept (into
-    /// `levels[0]`). When that is the last level counted (the guess, or a level below it),
-    /// the build reuses the count's sort, and the level above the guess is counted from the
-    /// same sort ([`splat::count_vertices_finer`]). The build of the final S_1 is reported as `S1`,
+    /// building it; the guess and the level above it are counted in one pass
+    /// ([`splat::count_vertices_and_finer`]). Then it builds the S_1 of the level kept (into
+    /// `levels[0]`). When that is the last level sorted (the guess, or a level below it), the
+    /// build reuses the count's sort. The build of the final S_1 is reported as `S1`,
     /// everything else as `level_count`.
     fn auto_levels(
         &mut self,
@@ -281,15 +281,18 @@ impl GridBuilder {
             let guess =
                 ((1.0 + (n as f64 / 8.0).max(1.0).log(4.0).floor()) as u32).clamp(1, MAX_LEVELS);
             let mut l = guess;
-            if guess == 1 || fits(count(&mut self.ws, guess)) {
-                // The next level is usually too fine: count it from this sort while the
-                // sorted sources are still in the cache; if the guess stays the answer, build
-                // it from the same sort.
-                let finer = |ws: &mut splat::Workspace, l: u32| {
-                    let g = GridGeometry::new(lo, hi, l);
-                    splat::count_vertices_finer(ws, &src, &g, 1).unwrap_or_else(|| count(ws, l + 1))
-                };
-                while l < MAX_LEVELS && fits(finer(&mut self.ws, l)) {
+            // The next level is usually too fine: it is counted in the same pass as the
+            // guess, from the guess's sort. If the guess stays the answer, it is built from
+            // the same sort.
+            let counted = (guess > 1).then(|| {
+                let g = GridGeometry::new(lo, hi, guess);
+                splat::count_vertices_and_finer(&mut self.ws, &src, &g, 1)
+            });
+            if counted.is_none_or(|(len, _)| fits(len)) {
+                let mut finer = counted.and_then(|(_, finer)| finer);
+                while l < MAX_LEVELS
+                    && fits(finer.take().unwrap_or_else(|| count(&mut self.ws, l + 1)))
+                {
                     l += 1;
                 }
                 if l == guess {

@@ -5,15 +5,19 @@
 //! scatter with atomics; here it is organised so that no two tasks ever write the same memory,
 //! without atomics or locks:
 //!
-//! 1. every source gets its cell and in-cell fraction f, and the sources are sorted by cell
-//!    row (z, then y) with a stable two-pass counting sort (input order is kept within a
-//!    row); their attributes are then packed in that order;
+//! 1. every source gets its cell and in-cell fraction f, and is packed with its attributes
+//!    into 40 bytes (plus 28 for the mass, variance and mean of a source that stands for
+//!    several lights); the packed sources are sorted by cell row (z, then y) with a stable
+//!    two-pass counting sort (input order is kept within a row). The sort, not the
+//!    arithmetic, is what memory bandwidth limits, so each pass buckets into a per-thread
+//!    buffer that stays in the L2 cache and then copies it out in one stream;
 //! 2. vertex row (v_y, v_z) receives from the sources of the four cell rows
 //!    (v_y - 1 or v_y, v_z - 1 or v_z). Each vertex layer is cut into bands of consecutive
 //!    vertex rows holding about [`BAND_SOURCES`] sources; a band task reads its cell rows in
 //!    order and sums their contributions in a rolling pair of dense vertex rows (kept in the
 //!    L2 cache), emitting each vertex row in x order once it is complete;
-//! 3. bands are concatenated in (z, y) order, so the level comes out in vertex order.
+//! 3. bands are concatenated in (z, y) order, in parallel, so the level comes out in vertex
+//!    order.
 //!
 //! A vertex's contributions arrive in an order fixed by the data (cell row y - 1 before y,
 //! layer z - 1 before z, input order within a row), and the bands are cut by the data, not by
@@ -80,16 +84,19 @@ impl Level {
         self.vertex.is_empty()
     }
 
-    fn push(&mut self, v: UVec3, a: &Accum, geom: &GridGeometry, level: u32) {
-        let h = f64::from(geom.cell_size(level));
-        let mean = a.p() / a.w();
+    /// Appends the grid light of vertex `v` with sums `a` at a level of cell size `h` of a
+    /// grid with origin `origin`.
+    #[inline]
+    fn push(&mut self, v: UVec3, a: &Accum, origin: DVec3, h: f64) {
+        let inv_w = 1.0 / a.w();
+        let mean = a.p() * inv_w;
         self.vertex.push(v);
         self.position
-            .push((geom.origin.as_dvec3() + (v.as_dvec3() + mean) * h).as_vec3());
+            .push((origin + (v.as_dvec3() + mean) * h).as_vec3());
         self.intensity.push(a.i().as_vec3());
         self.variance
-            .push(((a.q() / a.w() - mean * mean).max(DVec3::ZERO) * (h * h)).as_vec3());
-        self.normal.push((a.n() / a.w()).as_vec3());
+            .push(((a.q() * inv_w - mean * mean).max(DVec3::ZERO) * (h * h)).as_vec3());
+        self.normal.push((a.n() * inv_w).as_vec3());
         self.mass.push(a.w() as f32);
     }
 
@@ -141,15 +148,6 @@ impl Level {
         self.normal.clear();
         self.mass.clear();
     }
-
-    fn append(&mut self, other: Level) {
-        self.vertex.extend(other.vertex);
-        self.position.extend(other.position);
-        self.intensity.extend(other.intensity);
-        self.variance.extend(other.variance);
-        self.normal.extend(other.normal);
-        self.mass.extend(other.mass);
-    }
 }
 
 /// Sums of one vertex: W, P (local, cell units), Q (local, squared), intensity, normal.
@@ -200,18 +198,19 @@ impl Accum {
         self.part(3)
     }
 
-    /// The moments of prepared source `ps` for a vertex at offset 0 from its cell: W = m,
-    /// P = m g, Q = m (g^2 + var), intensity, m n. A contribution is these times the
+    /// The moments of prepared source `ps` (with its cluster attributes `c`, if any) for a
+    /// vertex at offset 0 from its cell: W = m, P = m g, Q = m (g^2 + var), intensity, m n,
+    /// where a point source has m = 1, g = f and var = 0. A contribution is these times the
     /// trilinear weight ([`Accum::add_scaled`]); [`Accum::shifted`] moves them to another
     /// corner. Computed once per source and layer instead of once per corner.
     #[inline(always)]
-    fn moments(ps: &PSource) -> Self {
-        let m = f64::from(ps.mass);
-        let g = ps.g.as_dvec3();
+    fn moments(ps: &PSource, c: Option<&Cluster>) -> Self {
+        let (m, g, var) = c.map_or((1.0, ps.f, Vec3::ZERO), |c| (c.mass, c.g, c.variance));
+        let (m, g) = (f64::from(m), g.as_dvec3());
         Self::from_parts(
             m,
             m * g,
-            m * (g * g + ps.variance.as_dvec3()),
+            m * (g * g + var.as_dvec3()),
             ps.intensity.as_dvec3(),
             m * ps.normal.as_dvec3(),
         )
@@ -292,48 +291,65 @@ pub(crate) fn corner_weight(f: Vec3, d: UVec3) -> f32 {
 pub const BAND_SOURCES: usize = 1 << 15;
 
 /// Sources per chunk of the parallel counting sort.
-const SORT_CHUNK: usize = 1 << 16;
+/// (A chunk's bucketed sources, 320 KB with their cluster attributes 544 KB, stay in the L2
+/// cache.)
+const SORT_CHUNK: usize = 1 << 13;
 
-/// One source, prepared for a level: its cell x, in-cell fraction and attributes, packed so
-/// that the hot loop reads memory sequentially (variance in cell units). Its cell row (y, z)
-/// is where it is stored.
+/// One source, prepared for a level: its cell, in-cell fraction and attributes, packed so
+/// that the hot loops read memory sequentially. Its cell layer z is the bucket it is stored
+/// in. 40 bytes: the sort moves every source twice, and memory traffic is its cost.
 #[derive(Clone, Copy, Debug, Default)]
 struct PSource {
     /// In-cell fraction that gives the trilinear weights.
     f: Vec3,
-    /// In-cell position of the moments (P, Q): `f`, except for a restriction, where `f` is
-    /// the fine vertex's fraction and `g` that of the fine grid light's mean position.
-    g: Vec3,
-    cell_x: u32,
+    /// Cell x and y (at most 2^([`MAX_LEVELS`] - 1) cells per axis).
+    cell: [u16; 2],
     intensity: Vec3,
     normal: Vec3,
+}
+
+impl PSource {
+    /// The cell's x and y (z is the layer the source is stored in).
+    #[inline]
+    fn cell_xy(&self) -> UVec3 {
+        UVec3::new(u32::from(self.cell[0]), u32::from(self.cell[1]), 0)
+    }
+}
+
+/// The attributes of a source that stands for several input lights (a grid light of a
+/// finer level), kept apart from [`PSource`] so that the input lights of S_1, which have
+/// none, do not carry them through the sort.
+#[derive(Clone, Copy, Debug, Default)]
+struct Cluster {
+    /// In-cell position of the moments (P, Q): for a restriction, `PSource::f` is the fine
+    /// vertex's fraction and `g` that of the fine grid light's mean position.
+    g: Vec3,
     mass: f32,
+    /// Positional variance in cell units.
     variance: Vec3,
 }
 
 /// Reusable working memory of the splat: a renderer that rebuilds its hierarchy every frame
 /// keeps one, so that no step pays for fresh memory (page faults cost about as much as the
-/// arithmetic here). After [`Workspace::prepare`], the sources of cell row (y, z) are
+/// arithmetic here). After [`Workspace::sort_by_row`], the sources of cell row (y, z) are
 /// `src[row_start[z r + y]..row_start[z r + y + 1]]`, in input order.
 #[derive(Debug, Default)]
 pub struct Workspace {
-    by_row: Vec<Located>,
+    /// The sources bucketed by cell layer within each chunk of the input (first pass).
+    staged: Vec<PSource>,
+    staged_clusters: Vec<Cluster>,
     src: Vec<PSource>,
+    /// The cluster attributes of `src` (same order), if the sources have any.
+    clusters: Vec<Cluster>,
+    has_clusters: bool,
     z_start: Vec<usize>,
     row_start: Vec<usize>,
     /// The grid, level and source count of the last sort.
     sorted: Option<(GridGeometry, u32, usize)>,
     bands: Vec<Band>,
+    /// The grid lights of each band (kept for their memory).
+    parts: Vec<Level>,
     r: u32,
-}
-
-/// A located source as the sorts move it: its cell, in-cell fraction and input index, so
-/// that the passes after a sort read memory in order.
-#[derive(Clone, Copy, Debug, Default)]
-struct Located {
-    cell: UVec3,
-    f: Vec3,
-    index: u32,
 }
 
 /// Vertex rows `y0..y1` of vertex layer `z`: one task of the splat.
@@ -345,47 +361,13 @@ struct Band {
 }
 
 impl Workspace {
-    /// Locates the sources, sorts them by cell row (stable: input order within a row), packs
-    /// their attributes in that order, and cuts the vertex layers into bands.
-    fn prepare(&mut self, src: &Sources, geom: &GridGeometry, level: u32) {
-        self.sort_by_row(src, geom, level);
-        self.pack(src, geom, level);
-    }
-
-    /// Packs the attributes of the sources in the order of the last sort (which must have
-    /// been of `src` at `level` of `geom`), then cuts the vertex layers into bands.
-    fn pack(&mut self, src: &Sources, geom: &GridGeometry, level: u32) {
-        let h = geom.cell_size(level);
-        let inv_h2 = 1.0 / (h * h).max(f32::MIN_POSITIVE);
-        let restriction = src.finer_vertices.is_some();
-        self.by_row
-            .par_iter()
-            .map(|&Located { cell, f, index }| {
-                let i = index as usize;
-                let g = if restriction {
-                    (src.positions[i] - geom.origin) / h - cell.as_vec3()
-                } else {
-                    f
-                };
-                PSource {
-                    f,
-                    g,
-                    cell_x: cell.x,
-                    intensity: src.intensity[i],
-                    normal: src.normals.map_or(Vec3::ZERO, |n| n[i]),
-                    mass: src.mass.map_or(1.0, |m| m[i]),
-                    variance: src.variance.map_or(Vec3::ZERO, |v| v[i] * inv_h2),
-                }
-            })
-            .collect_into_vec(&mut self.src);
-        self.cut_bands();
-    }
-
     /// Stable counting sort of the sources by cell row (z, then y) at `level`, in parallel,
-    /// locating each source on the way (its cell and in-cell fraction). Every chunk of
-    /// sources locates itself and buckets itself by z (keeping input order); then every z
-    /// bucket counts its chunks' pieces by y and scatters them, in chunk order, to its rows.
-    /// Fills `by_row`, `z_start` and `row_start`.
+    /// locating and packing each source on the way (its cell, in-cell fraction and
+    /// attributes), then cuts the vertex layers into bands. Every chunk of the input
+    /// counts its sources per cell layer, then packs them into its own range of `staged`,
+    /// bucketed by layer (input order kept); then every layer counts its chunks' pieces by
+    /// row and moves them, in chunk order, to its rows of `src`. The input is read in order
+    /// and every move is of whole packed sources, so no pass gathers from random places.
     fn sort_by_row(&mut self, src: &Sources, geom: &GridGeometry, level: u32) {
         let h = geom.cell_size(level);
         let r = geom.cells_per_axis(level);
@@ -396,59 +378,127 @@ impl Workspace {
             None => locate(src.positions[i], geom.origin, h, r),
             Some(v) => locate_finer_vertex(v[i], r),
         };
+        // The cell layer alone, as `locate_one` finds it, for the count by layer.
+        let top = (r - 1) as f32;
+        let locate_z = |i: usize| match src.finer_vertices {
+            None => ((src.positions[i].z - geom.origin.z) / h).clamp(0.0, top) as usize,
+            Some(v) => (v[i].z / 2).min(r - 1) as usize,
+        };
+        let inv_h2 = 1.0 / (h * h).max(f32::MIN_POSITIVE);
+        let has_clusters =
+            src.finer_vertices.is_some() || src.mass.is_some() || src.variance.is_some();
+        self.has_clusters = has_clusters;
+        let pack_one = |i: usize| {
+            let (cell, f) = locate_one(i);
+            let ps = PSource {
+                f,
+                // Cells per axis are at most 2^(MAX_LEVELS - 1): the casts are exact.
+                cell: [cell.x as u16, cell.y as u16],
+                intensity: src.intensity[i],
+                normal: src.normals.map_or(Vec3::ZERO, |n| n[i]),
+            };
+            let cluster = has_clusters.then(|| Cluster {
+                g: if src.finer_vertices.is_some() {
+                    (src.positions[i] - geom.origin) / h - cell.as_vec3()
+                } else {
+                    f
+                },
+                mass: src.mass.map_or(1.0, |m| m[i]),
+                variance: src.variance.map_or(Vec3::ZERO, |v| v[i] * inv_h2),
+            });
+            (cell.z as usize, ps, cluster)
+        };
         let r = r as usize;
-        let local: Vec<(Vec<Located>, Vec<usize>)> = (0..n.div_ceil(SORT_CHUNK))
-            .into_par_iter()
-            .map(|ci| {
-                let range = ci * SORT_CHUNK..((ci + 1) * SORT_CHUNK).min(n);
-                let located: Vec<Located> = range
-                    .map(|i| {
-                        let (cell, f) = locate_one(i);
-                        Located {
-                            cell,
-                            f,
-                            index: i as u32,
-                        }
-                    })
-                    .collect();
+        self.staged.resize(n, PSource::default());
+        self.staged_clusters
+            .resize(if has_clusters { n } else { 0 }, Cluster::default());
+        let cluster_chunks: Vec<Option<&mut [Cluster]>> = if has_clusters {
+            self.staged_clusters
+                .chunks_mut(SORT_CHUNK)
+                .map(Some)
+                .collect()
+        } else {
+            (0..n.div_ceil(SORT_CHUNK)).map(|_| None).collect()
+        };
+        let chunk_starts: Vec<Vec<usize>> = self
+            .staged
+            .par_chunks_mut(SORT_CHUNK)
+            .zip(cluster_chunks)
+            .enumerate()
+            .map(|(ci, (out, mut out_clusters))| {
+                let range = ci * SORT_CHUNK..ci * SORT_CHUNK + out.len();
                 let mut start = vec![0usize; r + 1];
-                for l in &located {
-                    start[l.cell.z as usize + 1] += 1;
+                for i in range.clone() {
+                    start[locate_z(i) + 1] += 1;
                 }
                 for z in 0..r {
                     start[z + 1] += start[z];
                 }
+                // Bucketed in a per-thread scratch that stays in the L2 cache, then copied
+                // out in one stream: written straight to `out`, the r interleaved streams
+                // of the buckets each missed the cache line by line.
                 let mut next = start.clone();
-                let mut bucketed = vec![Located::default(); located.len()];
-                for l in located {
-                    let z = l.cell.z as usize;
-                    bucketed[next[z]] = l;
-                    next[z] += 1;
-                }
-                (bucketed, start)
+                with_scratch(|scratch, scratch_clusters| {
+                    scratch.resize(out.len(), PSource::default());
+                    if out_clusters.is_some() {
+                        scratch_clusters.resize(out.len(), Cluster::default());
+                    }
+                    for i in range {
+                        let (z, ps, cluster) = pack_one(i);
+                        scratch[next[z]] = ps;
+                        if let Some(c) = cluster {
+                            scratch_clusters[next[z]] = c;
+                        }
+                        next[z] += 1;
+                    }
+                    out.copy_from_slice(&scratch[..out.len()]);
+                    if let Some(oc) = out_clusters.as_deref_mut() {
+                        oc.copy_from_slice(&scratch_clusters[..oc.len()]);
+                    }
+                });
+                start
             })
             .collect();
         self.z_start.clear();
         self.z_start.resize(r + 1, 0);
         for z in 0..r {
-            let count: usize = local.iter().map(|(_, st)| st[z + 1] - st[z]).sum();
+            let count: usize = chunk_starts.iter().map(|st| st[z + 1] - st[z]).sum();
             self.z_start[z + 1] = self.z_start[z] + count;
         }
-        self.by_row.clear();
-        self.by_row.resize(n, Located::default());
+        self.src.resize(n, PSource::default());
+        self.clusters
+            .resize(if has_clusters { n } else { 0 }, Cluster::default());
         self.row_start.clear();
         self.row_start.resize(r * r + 1, 0);
         self.row_start[r * r] = n;
-        let z_start = &self.z_start;
-        split_buckets(&mut self.by_row, z_start)
+        let (z_start, staged, staged_clusters) =
+            (&self.z_start, &self.staged, &self.staged_clusters);
+        // Piece k of layer z: the staged indices of chunk k's sources in that layer.
+        let pieces = |z: usize| {
+            chunk_starts
+                .iter()
+                .enumerate()
+                .map(move |(ci, st)| ci * SORT_CHUNK + st[z]..ci * SORT_CHUNK + st[z + 1])
+        };
+        let cluster_layers: Vec<Option<&mut [Cluster]>> = if has_clusters {
+            split_buckets(&mut self.clusters, z_start)
+                .into_iter()
+                .map(Some)
+                .collect()
+        } else {
+            (0..r).map(|_| None).collect()
+        };
+        split_buckets(&mut self.src, z_start)
             .into_par_iter()
+            .zip(cluster_layers)
             .zip(self.row_start[..r * r].par_chunks_mut(r))
             .enumerate()
-            .for_each(|(z, (sorted, rows))| {
-                let pieces = || local.iter().flat_map(|(b, st)| &b[st[z]..st[z + 1]]);
+            .for_each(|(z, ((sorted, mut sorted_clusters), rows))| {
                 let mut next = vec![0usize; r + 1];
-                for l in pieces() {
-                    next[l.cell.y as usize + 1] += 1;
+                for piece in pieces(z) {
+                    for ps in &staged[piece] {
+                        next[usize::from(ps.cell[1]) + 1] += 1;
+                    }
                 }
                 for y in 0..r {
                     next[y + 1] += next[y];
@@ -456,12 +506,29 @@ impl Workspace {
                 for (y, row) in rows.iter_mut().enumerate() {
                     *row = z_start[z] + next[y];
                 }
-                for l in pieces() {
-                    let y = l.cell.y as usize;
-                    sorted[next[y]] = *l;
-                    next[y] += 1;
+                for piece in pieces(z) {
+                    if let Some(sc) = sorted_clusters.as_deref_mut() {
+                        for (ps, c) in staged[piece.clone()].iter().zip(&staged_clusters[piece]) {
+                            let y = usize::from(ps.cell[1]);
+                            sorted[next[y]] = *ps;
+                            sc[next[y]] = *c;
+                            next[y] += 1;
+                        }
+                    } else {
+                        for ps in &staged[piece] {
+                            let y = usize::from(ps.cell[1]);
+                            sorted[next[y]] = *ps;
+                            next[y] += 1;
+                        }
+                    }
                 }
             });
+        self.cut_bands();
+    }
+
+    /// The packed sources of cell layer `z`, in row order.
+    fn layer(&self, z: u32) -> &[PSource] {
+        &self.src[self.z_start[z as usize]..self.z_start[z as usize + 1]]
     }
 }
 
@@ -477,13 +544,13 @@ fn split_buckets<'a, T>(mut rest: &'a mut [T], z_start: &[usize]) -> Vec<&'a mut
 }
 
 impl Workspace {
-    /// The prepared sources of cell row (`y`, `z`); empty outside the grid.
-    fn cell_row(&self, y: u32, z: u32) -> &[PSource] {
+    /// The indices in `src` of the sources of cell row (`y`, `z`); empty outside the grid.
+    fn cell_row(&self, y: u32, z: u32) -> std::ops::Range<usize> {
         if y >= self.r || z >= self.r {
-            return &[];
+            return 0..0;
         }
         let k = (z * self.r + y) as usize;
-        &self.src[self.row_start[k]..self.row_start[k + 1]]
+        self.row_start[k]..self.row_start[k + 1]
     }
 
     /// Number of sources that can reach vertex row (`y`, `z`) through cell row `y` (the
@@ -521,23 +588,31 @@ impl Workspace {
 
     /// Sweeps band `b`: every source of the cell rows that reach its vertex rows adds its
     /// non-zero trilinear contributions to a two-row rolling buffer, and every vertex row is
-    /// handed to `emit` (touched vertices in x order) once complete. A vertex receives its
+    /// handed to `emit` (its touched vertices in x order) once complete. A vertex receives its
     /// contributions in a fixed order (cell row y - 1 before y, layer z - 1 before z, input
     /// order within a row), so the sums do not depend on the thread that runs the band.
+    /// `CLUSTERS` must be `has_clusters` (a constant, so that point sources compile to a loop
+    /// that does not look for cluster attributes).
     #[inline(always)]
-    fn sweep(&self, b: Band, rows: &mut RowPair, mut emit: impl FnMut(u32, &mut Row)) {
+    fn sweep<const CLUSTERS: bool>(
+        &self,
+        b: Band,
+        rows: &mut RowPair,
+        mut emit: impl FnMut(UVec3, &Accum),
+    ) {
         let side = self.r as usize + 1;
         rows.fit(side);
         let layers = [(b.z.wrapping_sub(1), 1.0f32), (b.z, 0.0f32)];
         for cy in b.y0.saturating_sub(1)..b.y1.min(self.r) {
             let (low, high) = rows.split();
             for (cz, dz) in layers {
-                for ps in self.cell_row(cy, cz) {
+                for k in self.cell_row(cy, cz) {
+                    let ps = &self.src[k];
                     let wz = if dz == 1.0 { ps.f.z } else { 1.0 - ps.f.z };
                     if wz <= 0.0 {
                         continue;
                     }
-                    let m = Accum::moments(ps);
+                    let m = Accum::moments(ps, CLUSTERS.then(|| &self.clusters[k]));
                     let m = if dz == 1.0 { m.shifted(2) } else { m };
                     // Vertex row cy (dy = 0) if it is in the band, cy + 1 (dy = 1) if it is.
                     if cy >= b.y0 {
@@ -549,16 +624,14 @@ impl Workspace {
                 }
             }
             if cy >= b.y0 {
-                emit(cy, low);
-                low.clear();
+                low.drain(|x, a| emit(UVec3::new(x, cy, b.z), a));
             }
             rows.swap();
         }
         // The last vertex row of the grid (y = r) is complete after cell row r - 1.
         if b.y1 == self.r + 1 {
             let (low, _) = rows.split();
-            emit(self.r, low);
-            low.clear();
+            low.drain(|x, a| emit(UVec3::new(x, self.r, b.z), a));
         }
     }
 }
@@ -570,7 +643,7 @@ fn add_row(row: &mut Row, ps: &PSource, wyz: f32, m: &Accum) {
     if wyz <= 0.0 {
         return;
     }
-    let x = ps.cell_x as usize;
+    let x = usize::from(ps.cell[0]);
     let w0 = (1.0 - ps.f.x) * wyz;
     if w0 > 0.0 {
         row.at(x).add_scaled(f64::from(w0), m);
@@ -581,38 +654,35 @@ fn add_row(row: &mut Row, ps: &PSource, wyz: f32, m: &Accum) {
     }
 }
 
-/// One vertex row of sums, dense in x, with the list of vertices touched so that clearing
-/// costs what was touched. At most 513 entries (about 53 KB): it stays in the L2 cache,
-/// where a dense 2-D layer would not.
+/// One vertex row of sums, dense in x, with one bit per vertex that says whether it was
+/// touched, so that reading the row out in x order and clearing it cost what was touched.
+/// At most 513 entries (about 66 KB): it stays in the L2 cache, where a dense 2-D layer
+/// would not.
 #[derive(Default)]
 struct Row {
     acc: Vec<Accum>,
-    hit: Vec<bool>,
-    touched: Vec<u32>,
+    hit: Vec<u64>,
 }
 
 impl Row {
     #[inline(always)]
     fn at(&mut self, x: usize) -> &mut Accum {
-        if !self.hit[x] {
-            self.hit[x] = true;
-            self.touched.push(x as u32);
-        }
+        self.hit[x / 64] |= 1 << (x % 64);
         &mut self.acc[x]
     }
 
-    /// The touched vertices in x order with their sums.
-    fn sorted(&mut self) -> impl Iterator<Item = (u32, &Accum)> {
-        self.touched.sort_unstable();
-        self.touched.iter().map(|&x| (x, &self.acc[x as usize]))
-    }
-
-    fn clear(&mut self) {
-        for &x in &self.touched {
-            self.acc[x as usize] = Accum::default();
-            self.hit[x as usize] = false;
+    /// Hands the touched vertices to `f` in x order with their sums, and clears them.
+    #[inline(always)]
+    fn drain(&mut self, mut f: impl FnMut(u32, &Accum)) {
+        for (w, word) in self.hit.iter_mut().enumerate() {
+            let mut bits = std::mem::take(word);
+            while bits != 0 {
+                let x = w * 64 + bits.trailing_zeros() as usize;
+                f(x as u32, &self.acc[x]);
+                self.acc[x] = Accum::default();
+                bits &= bits - 1;
+            }
         }
-        self.touched.clear();
     }
 }
 
@@ -630,7 +700,7 @@ impl RowPair {
         for row in &mut self.rows {
             if row.acc.len() < side {
                 row.acc.resize(side, Accum::default());
-                row.hit.resize(side, false);
+                row.hit.resize(side.div_ceil(64), 0);
             }
         }
     }
@@ -653,6 +723,19 @@ fn with_rows<T>(f: impl FnOnce(&mut RowPair) -> T) -> T {
     ROWS.with(|s| f(&mut s.borrow_mut()))
 }
 
+thread_local! {
+    static SCRATCH: std::cell::RefCell<(Vec<PSource>, Vec<Cluster>)> =
+        const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+}
+
+/// The per-thread buffers a chunk of the sort is bucketed in.
+fn with_scratch<T>(f: impl FnOnce(&mut Vec<PSource>, &mut Vec<Cluster>) -> T) -> T {
+    SCRATCH.with(|s| {
+        let (a, b) = &mut *s.borrow_mut();
+        f(a, b)
+    })
+}
+
 /// Builds the grid lights of `level` from `src` into `out` (see the module docs), using
 /// (and growing) the working memory `ws`.
 pub fn splat_into(
@@ -662,13 +745,13 @@ pub fn splat_into(
     level: u32,
     out: &mut Level,
 ) {
-    ws.prepare(src, geom, level);
+    ws.sort_by_row(src, geom, level);
     sweep_into(ws, geom, level, out);
 }
 
 /// [`splat_into`] right after [`count_vertices`] of the same `src` at the same `level` of the
-/// same `geom`: the count's sort is reused, only the attributes are packed. (The number of
-/// levels is chosen by counting; the level kept is then built without sorting again.)
+/// same `geom`: the count's sort (which packed the sources) is reused. (The number of levels
+/// is chosen by counting; the level kept is then built without sorting again.)
 pub(crate) fn splat_counted_into(
     ws: &mut Workspace,
     src: &Sources,
@@ -679,25 +762,54 @@ pub(crate) fn splat_counted_into(
     if ws.sorted != Some((*geom, level, src.positions.len())) {
         ws.sort_by_row(src, geom, level);
     }
-    ws.pack(src, geom, level);
     sweep_into(ws, geom, level, out);
 }
 
 /// Sweeps the bands of a prepared workspace into `out`.
-fn sweep_into(ws: &Workspace, geom: &GridGeometry, level: u32, out: &mut Level) {
-    let parts: Vec<Level> = ws
-        .bands
-        .par_iter()
-        .map(|&b| {
-            let mut part = Level::default();
-            with_rows(|rows| sweep_band(ws, b, rows, geom, level, &mut part));
-            part
-        })
-        .collect();
-    out.clear();
+/// Each band writes its own part (kept in `ws` between builds), and the parts are then
+/// copied to their places in `out` in parallel.
+fn sweep_into(ws: &mut Workspace, geom: &GridGeometry, level: u32, out: &mut Level) {
+    let mut parts = std::mem::take(&mut ws.parts);
+    parts.resize_with(ws.bands.len(), Level::default);
+    let w = &*ws;
+    parts
+        .par_iter_mut()
+        .zip(w.bands.par_iter())
+        .for_each(|(part, &b)| {
+            part.clear();
+            with_rows(|rows| sweep_band(w, b, rows, geom, level, part));
+        });
+    let used = &parts[..ws.bands.len()];
+    let n = used.iter().map(Level::len).sum();
+    concat_into(used, n, &mut out.vertex, |p| &p.vertex);
+    concat_into(used, n, &mut out.position, |p| &p.position);
+    concat_into(used, n, &mut out.intensity, |p| &p.intensity);
+    concat_into(used, n, &mut out.variance, |p| &p.variance);
+    concat_into(used, n, &mut out.normal, |p| &p.normal);
+    concat_into(used, n, &mut out.mass, |p| &p.mass);
+    ws.parts = parts;
+}
+
+/// Writes field `get` of the `parts` (`n` elements in all) one after the other into `out`,
+/// in parallel.
+fn concat_into<T: Copy + Default + Send + Sync>(
+    parts: &[Level],
+    n: usize,
+    out: &mut Vec<T>,
+    get: impl Fn(&Level) -> &[T] + Sync,
+) {
+    out.resize(n, T::default());
+    let mut rest = &mut out[..];
+    let mut places = Vec::with_capacity(parts.len());
     for p in parts {
-        out.append(p);
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut(get(p).len());
+        places.push(head);
+        rest = tail;
     }
+    places
+        .into_par_iter()
+        .zip(parts)
+        .for_each(|(dst, p)| dst.copy_from_slice(get(p)));
 }
 
 /// [`Workspace::sweep`] of band `b` into the grid lights `part`, compiled also for AVX2 with
@@ -712,11 +824,13 @@ fn sweep_band(
     level: u32,
     part: &mut Level,
 ) {
-    ws.sweep(b, rows, |y, row| {
-        for (x, a) in row.sorted() {
-            part.push(UVec3::new(x, y, b.z), a, geom, level);
-        }
-    });
+    let (origin, h) = (geom.origin.as_dvec3(), f64::from(geom.cell_size(level)));
+    let emit = |v, a: &Accum| part.push(v, a, origin, h);
+    if ws.has_clusters {
+        ws.sweep::<true>(b, rows, emit);
+    } else {
+        ws.sweep::<false>(b, rows, emit);
+    }
 }
 
 /// Builds the grid lights of `level` from `src` with fresh working memory.
@@ -732,48 +846,45 @@ pub fn splat(src: &Sources, geom: &GridGeometry, level: u32) -> Level {
 /// same sort, one task per vertex layer marks the vertices it touches in a bit set of the
 /// layer (33 KB at 512 cells per axis: it stays in the L1 cache), with the same weight
 /// products as the splat, so the same weights are zero. Used to choose the number of levels.
+/// The sort stays in `ws`: [`splat_counted_into`] then builds the level without sorting again.
 pub fn count_vertices(ws: &mut Workspace, src: &Sources, geom: &GridGeometry, level: u32) -> usize {
     ws.sort_by_row(src, geom, level);
-    let ws = &*ws;
-    let r = ws.r;
-    (0..=r)
-        .into_par_iter()
-        .map(|vz| {
-            let from = ws.z_start[vz.saturating_sub(1) as usize];
-            let to = ws.z_start[(vz + 1).min(r) as usize];
-            count_layer(r + 1, |layer| {
-                for &Located { cell: c, f, .. } in &ws.by_row[from..to] {
-                    let wz = if c.z == vz { 1.0 - f.z } else { f.z };
-                    layer.mark(c, f, wz);
-                }
-            })
-        })
-        .sum()
+    count_sorted::<false>(ws).0
 }
 
-/// [`count_vertices`] of the same sources at the same `level` of the next finer geometry
-/// (l_max + 1: twice the cells per axis), from the sort that the last count or build at
-/// `level` of `geom` left in `ws`, without sorting again: `None` if `ws` holds another sort,
-/// or the sources are a restriction's.
+/// [`count_vertices`], and the same count at the same `level` of the next finer geometry
+/// (l_max + 1: twice the cells per axis) from the same sort and in the same pass over the
+/// sources (`None` for a restriction's sources, whose fine vertices have no finer cell).
 ///
 /// A source in cell c with fraction f lies in the finer cell 2c + b with fraction 2f - b, b =
 /// [2f >= 1], per axis. Both are exact in floating point and equal to locating it on the
-/// finer grid directly (whose spacing is exactly half), so the same weights are zero. One
-/// task per coarse cell layer m marks the finer vertex layers 2m (from the sources of
-/// coarse layers m - 1 and m) and 2m + 1 (from layer m): each source is read twice, as in
-/// [`count_vertices`], and marks without branching on its finer z, which is a coin toss.
-#[must_use]
-pub fn count_vertices_finer(
-    ws: &Workspace,
+/// finer grid directly (whose spacing is exactly half), so the same weights are zero.
+pub fn count_vertices_and_finer(
+    ws: &mut Workspace,
     src: &Sources,
     geom: &GridGeometry,
     level: u32,
-) -> Option<usize> {
-    if ws.sorted != Some((*geom, level, src.positions.len())) || src.finer_vertices.is_some() {
-        return None;
+) -> (usize, Option<usize>) {
+    ws.sort_by_row(src, geom, level);
+    if src.finer_vertices.is_some() {
+        return (count_sorted::<false>(ws).0, None);
     }
-    let r = ws.r;
-    let side = 2 * r + 1;
+    let (n, finer) = count_sorted::<true>(ws);
+    (n, Some(finer))
+}
+
+/// The vertex counts of the sort in `ws` (and, if `FINER`, of the grid twice as fine). One
+/// task per layer m counts vertex layer m from the sources of cell layers m - 1 and m, and
+/// the finer vertex layers 2m (from the same sources) and 2m + 1 (from layer m): each source
+/// is read twice.
+///
+/// A source strictly inside its cell (see [`interior`]) gives all 8 corners a non-zero
+/// weight, so it only marks its cell; the layer's marked cells are then dilated to their
+/// corners row by row ([`LayerBits::count_with_corners`]). Only the other sources (on a
+/// cell face) mark their corners one by one, with the sweep's weight products.
+fn count_sorted<const FINER: bool>(ws: &Workspace) -> (usize, usize) {
+    let r = ws.r as usize;
+    let fine_side = if FINER { 2 * r + 1 } else { 0 };
     // Finer cell and fraction of x and y: t = 2f, b = [t >= 1], cell 2c + b, fraction t - b,
     // in SSE lanes (a scalar comparison becomes a branch, mispredicted half the time).
     let finer_xy = |c: UVec3, f: Vec3| {
@@ -786,68 +897,130 @@ pub fn count_vertices_finer(
             Vec3::new(fine.x, fine.y, 0.0),
         )
     };
-    let slab = |m: u32| &ws.by_row[ws.z_start[m as usize]..ws.z_start[m as usize + 1]];
-    Some(
-        (0..=r)
-            .into_par_iter()
-            .map(|m| {
-                count_layers(side, |[even, odd]: &mut [LayerBits; 2]| {
-                    // With t = 2 f_z, a source of coarse layer m lies in the finer cell layer
-                    // 2m (t < 1, fraction t) or 2m + 1 (t >= 1, fraction t - 1), and its z
-                    // weights follow without asking which: max(0, t - 1) in finer vertex
-                    // layer 2m + 2, min(t, 2 - t) in 2m + 1, max(0, 1 - t) in 2m (the same
-                    // values as 1 - fraction and fraction, exactly).
+    (0..=ws.r)
+        .into_par_iter()
+        .map(|m| {
+            let sides = [r + 1, r + 1, fine_side, fine_side, fine_side, fine_side];
+            count_layers(
+                sides,
+                |[
+                    mut cells,
+                    mut corners,
+                    mut even_cells,
+                    mut even,
+                    mut odd_cells,
+                    mut odd,
+                ]| {
+                    // With t = 2 f_z, a source of cell layer m lies in the finer cell layer 2m
+                    // (t < 1, fraction t) or 2m + 1 (t >= 1, fraction t - 1), and its z weights
+                    // follow without asking which: max(0, t - 1) in finer vertex layer 2m + 2,
+                    // min(t, 2 - t) in 2m + 1, max(0, 1 - t) in 2m (the same values as
+                    // 1 - fraction and fraction, exactly).
                     if m > 0 {
-                        for &Located { cell, f, .. } in slab(m - 1) {
-                            let (c, fxy) = finer_xy(cell, f);
-                            even.mark(c, fxy, (2.0 * f.z - 1.0).max(0.0));
+                        for ps in ws.layer(m - 1) {
+                            let c = ps.cell_xy();
+                            if interior(ps.f) {
+                                cells.set(c, true);
+                            } else {
+                                corners.mark(c, ps.f, ps.f.z);
+                            }
+                            if FINER {
+                                let (c, fxy) = finer_xy(c, ps.f);
+                                let t = 2.0 * ps.f.z;
+                                let upper = t >= 1.0;
+                                if interior(fxy.with_z(t - f32::from(upper))) {
+                                    even_cells.set(c, upper);
+                                } else {
+                                    even.mark(c, fxy, (t - 1.0).max(0.0));
+                                }
+                            }
                         }
                     }
-                    if m < r {
-                        for &Located { cell, f, .. } in slab(m) {
-                            let (c, fxy) = finer_xy(cell, f);
-                            let t = 2.0 * f.z;
-                            even.mark(c, fxy, (1.0 - t).max(0.0));
-                            odd.mark(c, fxy, t.min(2.0 - t));
+                    if m < ws.r {
+                        for ps in ws.layer(m) {
+                            let c = ps.cell_xy();
+                            if interior(ps.f) {
+                                cells.set(c, true);
+                            } else {
+                                corners.mark(c, ps.f, 1.0 - ps.f.z);
+                            }
+                            if FINER {
+                                let (c, fxy) = finer_xy(c, ps.f);
+                                let t = 2.0 * ps.f.z;
+                                let upper = t >= 1.0;
+                                if interior(fxy.with_z(t - f32::from(upper))) {
+                                    even_cells.set(c, !upper);
+                                    odd_cells.set(c, true);
+                                } else {
+                                    even.mark(c, fxy, (1.0 - t).max(0.0));
+                                    odd.mark(c, fxy, t.min(2.0 - t));
+                                }
+                            }
                         }
                     }
-                })
-            })
-            .sum(),
-    )
+                    let n = corners.count_with_corners(&cells);
+                    let n_finer = if FINER {
+                        even.count_with_corners(&even_cells) + odd.count_with_corners(&odd_cells)
+                    } else {
+                        0
+                    };
+                    (n, n_finer)
+                },
+            )
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
-/// Vertices of one layer (`side` x `side` vertices) marked by `visit` (see
-/// [`LayerBits::mark`]).
-fn count_layer(side: u32, visit: impl FnOnce(&mut LayerBits)) -> usize {
-    count_layers(side, |[layer]: &mut [LayerBits; 1]| visit(layer))
+/// True if every trilinear weight of a source with in-cell fraction `f` is non-zero: each
+/// factor f or 1 - f is at least 2^-40 (1 - f is at least 2^-24 once f < 1 in f32), so a
+/// product of three is at least 2^-120, above the smallest normal f32 (2^-126).
+#[inline]
+fn interior(f: Vec3) -> bool {
+    const MIN: f32 = 1.0 / (1u64 << 40) as f32;
+    f.min_element() >= MIN && f.max_element() < 1.0
 }
 
-/// Vertices of `N` layers (`side` x `side` vertices each) marked by `visit`.
-fn count_layers<const N: usize>(side: u32, visit: impl FnOnce(&mut [LayerBits; N])) -> usize {
+/// `N` bit sets of `sides[k]` rows of `sides[k]` bits (see [`LayerBits`]), cleared, handed
+/// to `visit`.
+fn count_layers<const N: usize, T>(
+    sides: [usize; N],
+    visit: impl FnOnce([LayerBits; N]) -> T,
+) -> T {
     with_bits(|bits| {
-        let side = side as usize;
-        let words = (side * side).div_ceil(64);
+        let row_words = sides.map(|side| side.div_ceil(64));
+        let words: [usize; N] = std::array::from_fn(|k| sides[k] * row_words[k]);
         bits.clear();
-        bits.resize(N * words, 0);
+        bits.resize(words.iter().sum(), 0);
         let mut rest: &mut [u64] = bits;
-        let mut layers: [LayerBits; N] = std::array::from_fn(|_| {
-            let (layer, tail) = std::mem::take(&mut rest).split_at_mut(words);
+        let mut k = 0;
+        let layers: [LayerBits; N] = std::array::from_fn(|_| {
+            let (layer, tail) = std::mem::take(&mut rest).split_at_mut(words[k]);
             rest = tail;
-            LayerBits { bits: layer, side }
+            k += 1;
+            LayerBits {
+                bits: layer,
+                row_words: row_words[k - 1],
+            }
         });
-        visit(&mut layers);
-        bits.iter().map(|b| b.count_ones() as usize).sum()
+        visit(layers)
     })
 }
 
-/// The vertices of one layer touched so far, one bit each.
+/// The vertices (or cells) of one layer marked so far, one bit each, row by row: bit x of
+/// row y is bit x % 64 of word y * row_words + x / 64.
 struct LayerBits<'a> {
     bits: &'a mut [u64],
-    side: usize,
+    row_words: usize,
 }
 
 impl LayerBits<'_> {
+    /// Sets the bit of (`c.x`, `c.y`) if `on`, without a branch.
+    #[inline]
+    fn set(&mut self, c: UVec3, on: bool) {
+        let (x, y) = (c.x as usize, c.y as usize);
+        self.bits[y * self.row_words + x / 64] |= u64::from(on) << (x % 64);
+    }
+
     /// Marks the layer's vertices of cell `c` (x, y) that a source with fraction `f` (x, y)
     /// and z weight `wz` gives a non-zero weight: the same products as the sweep's, so that
     /// the same weights are zero. Without branches: every corner's word is written.
@@ -857,10 +1030,28 @@ impl LayerBits<'_> {
             let wyz = wz * wy;
             for (dx, wx) in [1.0 - f.x, f.x].into_iter().enumerate() {
                 let hit = (wyz > 0.0) & (wx * wyz > 0.0);
-                let k = (c.y as usize + dy) * self.side + c.x as usize + dx;
-                self.bits[k / 64] |= u64::from(hit) << (k % 64);
+                self.set(c + UVec3::new(dx as u32, dy as u32, 0), hit);
             }
         }
+    }
+
+    /// Number of vertices marked here or a corner of a cell marked in `cells`: vertex
+    /// (x, y) is a corner of cells x - 1 and x of rows y - 1 and y.
+    fn count_with_corners(&self, cells: &LayerBits) -> usize {
+        let w = self.row_words;
+        let rows = self.bits.len() / w.max(1);
+        let cell_row = |y: usize| &cells.bits[y * w..(y + 1) * w];
+        let mut n = 0;
+        for y in 0..rows {
+            let mut carry = 0;
+            for k in 0..w {
+                let c = if y > 0 { cell_row(y - 1)[k] } else { 0 } | cell_row(y)[k];
+                let corners = c | c << 1 | carry;
+                carry = c >> 63;
+                n += (corners | self.bits[y * w + k]).count_ones() as usize;
+            }
+        }
+        n
     }
 }
 
@@ -879,8 +1070,9 @@ pub(crate) fn level_from_sums(
     level: u32,
 ) -> Level {
     let mut out = Level::default();
+    let (origin, h) = (geom.origin.as_dvec3(), f64::from(geom.cell_size(level)));
     for (v, a) in sums {
-        out.push(v, &a, geom, level);
+        out.push(v, &a, origin, h);
     }
     out
 }
@@ -930,6 +1122,9 @@ mod tests {
             for s in [src, restriction] {
                 let n = count_vertices(&mut ws, &s, &geom, 1);
                 assert_eq!(n, splat(&s, &geom, 1).len(), "l_max {l_max}");
+                let (both, finer) = count_vertices_and_finer(&mut ws, &s, &geom, 1);
+                assert_eq!(both, n, "l_max {l_max}");
+                assert_eq!(finer.is_none(), s.finer_vertices.is_some());
             }
             // The count at l_max + 1 from this sort, against a sort at l_max + 1. Some
             // positions on the cell boundaries of the finer grid (fractions 0 and 1/2).
@@ -953,9 +1148,9 @@ mod tests {
                     ..geom
                 };
                 let expected = splat(&s, &finer, 1).len();
-                count_vertices(&mut ws, &s, &geom, 1);
-                assert_eq!(count_vertices_finer(&ws, &s, &geom, 1), Some(expected));
-                assert_eq!(count_vertices_finer(&ws, &s, &finer, 1), None);
+                let (n, n_finer) = count_vertices_and_finer(&mut ws, &s, &geom, 1);
+                assert_eq!(n, splat(&s, &geom, 1).len(), "l_max {l_max}");
+                assert_eq!(n_finer, Some(expected), "l_max {l_max}");
             }
         }
     }
