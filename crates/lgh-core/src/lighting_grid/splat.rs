@@ -806,10 +806,13 @@ fn concat_into<T: Copy + Default + Send + Sync>(
         places.push(head);
         rest = tail;
     }
-    places
-        .into_par_iter()
-        .zip(parts)
-        .for_each(|(dst, p)| dst.copy_from_slice(get(p)));
+    let copy = |(dst, p): (&mut [T], &Level)| dst.copy_from_slice(get(p));
+    // Below this, a parallel loop costs more than it saves.
+    if n < 1 << 15 {
+        places.into_iter().zip(parts).for_each(copy);
+    } else {
+        places.into_par_iter().zip(parts).for_each(copy);
+    }
 }
 
 /// [`Workspace::sweep`] of band `b` into the grid lights `part`, compiled also for AVX2 with
