@@ -298,7 +298,7 @@ const SORT_CHUNK: usize = 1 << 13;
 /// One source, prepared for a level: its cell, in-cell fraction and attributes, packed so
 /// that the hot loops read memory sequentially. Its cell layer z is the bucket it is stored
 /// in. 40 bytes: the sort moves every source twice, and memory traffic is its cost.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct PSource {
     /// In-cell fraction that gives the trilinear weights.
     f: Vec3,
@@ -319,7 +319,7 @@ impl PSource {
 /// The attributes of a source that stands for several input lights (a grid light of a
 /// finer level), kept apart from [`PSource`] so that the input lights of S_1, which have
 /// none, do not carry them through the sort.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Cluster {
     /// In-cell position of the moments (P, Q): for a restriction, `PSource::f` is the fine
     /// vertex's fraction and `g` that of the fine grid light's mean position.
@@ -339,6 +339,8 @@ pub struct Workspace {
     staged: Vec<PSource>,
     staged_clusters: Vec<Cluster>,
     src: Vec<PSource>,
+    /// Row starts of the fine level of a restriction ([`Workspace::gather_rows`]).
+    fine_rows: Vec<usize>,
     /// The cluster attributes of `src` (same order), if the sources have any.
     clusters: Vec<Cluster>,
     has_clusters: bool,
@@ -369,6 +371,12 @@ impl Workspace {
     /// row and moves them, in chunk order, to its rows of `src`. The input is read in order
     /// and every move is of whole packed sources, so no pass gathers from random places.
     fn sort_by_row(&mut self, src: &Sources, geom: &GridGeometry, level: u32) {
+        self.sort_by_row_with(src, geom, level, true);
+    }
+
+    /// [`Workspace::sort_by_row`], with the shortcut of [`Workspace::gather_rows`] for
+    /// restrictions if `gather`.
+    fn sort_by_row_with(&mut self, src: &Sources, geom: &GridGeometry, level: u32, gather: bool) {
         let h = geom.cell_size(level);
         let r = geom.cells_per_axis(level);
         self.r = r;
@@ -409,6 +417,13 @@ impl Workspace {
             (cell.z as usize, ps, cluster)
         };
         let r = r as usize;
+        if gather
+            && let Some(v) = src.finer_vertices
+            && self.gather_rows(v, r, pack_one)
+        {
+            self.cut_bands();
+            return;
+        }
         self.staged.resize(n, PSource::default());
         self.staged_clusters
             .resize(if has_clusters { n } else { 0 }, Cluster::default());
@@ -524,6 +539,83 @@ impl Workspace {
                 }
             });
         self.cut_bands();
+    }
+
+    /// The sort of [`Workspace::sort_by_row`] for the sources of a restriction whose fine
+    /// vertices `v` are in vertex order (z, then y), as a [`Level`] keeps them: it is then a
+    /// concatenation of row ranges of the input, so the sources are packed in one pass
+    /// instead of the two of the counting sort. Cell row (Y, Z) holds the fine vertex rows
+    /// (2Y + a, 2Z + b) for a, b in {0, 1}, and 2 on the last row or layer (the clamp puts
+    /// the grid's last vertex in cell r - 1), in input order: b, then a. Returns false,
+    /// doing nothing, if `v` is not in vertex order.
+    fn gather_rows(
+        &mut self,
+        v: &[UVec3],
+        r: usize,
+        pack_one: impl Fn(usize) -> (usize, PSource, Option<Cluster>) + Sync,
+    ) -> bool {
+        let key = |u: &UVec3| (u.z, u.y);
+        let in_grid = |u: &UVec3| u.max_element() as usize <= 2 * r;
+        if !v.par_windows(2).all(|w| key(&w[0]) <= key(&w[1])) || !v.par_iter().all(in_grid) {
+            return false;
+        }
+        // Fine vertex row (y, z) is v[fine_rows[z side + y]..fine_rows[z side + y + 1]].
+        let side = 2 * r + 1;
+        self.fine_rows.resize(side * side + 1, 0);
+        self.fine_rows[side * side] = v.len();
+        self.fine_rows[..side * side]
+            .par_chunks_mut(side)
+            .enumerate()
+            .for_each(|(z, rows)| {
+                let lo = v.partition_point(|u| (u.z as usize) < z);
+                let hi = v.partition_point(|u| (u.z as usize) <= z);
+                rows.fill(0);
+                for u in &v[lo..hi] {
+                    rows[u.y as usize] += 1;
+                }
+                let mut start = lo;
+                for row in rows {
+                    (*row, start) = (start, start + *row);
+                }
+            });
+        let fine_rows = &self.fine_rows;
+        // The fine rows (or layers) of cell row (or layer) c.
+        let fine = |c: usize| 2 * c..if c + 1 == r { 2 * c + 3 } else { 2 * c + 2 };
+        let ranges = |y: usize, z: usize| {
+            fine(z).flat_map(move |fz| {
+                fine(y).map(move |fy| fine_rows[fz * side + fy]..fine_rows[fz * side + fy + 1])
+            })
+        };
+        self.row_start.clear();
+        self.row_start.resize(r * r + 1, 0);
+        self.z_start.clear();
+        self.z_start.resize(r + 1, 0);
+        let mut start = 0;
+        for z in 0..r {
+            self.z_start[z] = start;
+            for y in 0..r {
+                self.row_start[z * r + y] = start;
+                start += ranges(y, z).map(|range| range.len()).sum::<usize>();
+            }
+        }
+        self.z_start[r] = start;
+        self.row_start[r * r] = start;
+        let n = v.len();
+        self.src.resize(n, PSource::default());
+        self.clusters.resize(n, Cluster::default());
+        split_buckets(&mut self.src, &self.z_start)
+            .into_par_iter()
+            .zip(split_buckets(&mut self.clusters, &self.z_start))
+            .enumerate()
+            .for_each(|(z, (out, out_clusters))| {
+                let sources = (0..r).flat_map(|y| ranges(y, z)).flatten();
+                for (k, i) in sources.enumerate() {
+                    let (_, ps, cluster) = pack_one(i);
+                    out[k] = ps;
+                    out_clusters[k] = cluster.unwrap_or_default();
+                }
+            });
+        true
     }
 
     /// The packed sources of cell layer `z`, in row order.
@@ -1083,6 +1175,48 @@ pub(crate) fn level_from_sums(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The restriction's shortcut ([`Workspace::gather_rows`]) sorts exactly as the counting
+    /// sort does, and is not taken for vertices out of vertex order.
+    #[test]
+    fn restriction_rows_match_the_counting_sort() {
+        let mut rng = Rng::new(&[3, 5]);
+        let positions: Vec<Vec3> = (0..5000)
+            .map(|_| Vec3::new(rng.next_f32(), rng.next_f32() * 0.3, rng.next_f32()) * 4.0)
+            .collect();
+        let intensity = vec![Vec3::ONE; positions.len()];
+        let src = Sources {
+            positions: &positions,
+            intensity: &intensity,
+            normals: None,
+            mass: None,
+            variance: None,
+            finer_vertices: None,
+        };
+        for l_max in 2..=6 {
+            let geom = GridGeometry::new(Vec3::ZERO, Vec3::splat(4.0), l_max);
+            let fine = splat(&src, &geom, 1);
+            let restriction = fine.as_restriction_sources(false);
+            let (mut gathered, mut sorted) = (Workspace::default(), Workspace::default());
+            gathered.sort_by_row_with(&restriction, &geom, 2, true);
+            sorted.sort_by_row_with(&restriction, &geom, 2, false);
+            assert!(gathered.staged.is_empty(), "the shortcut was not taken");
+            assert_eq!(gathered.row_start, sorted.row_start, "l_max {l_max}");
+            assert_eq!(gathered.z_start, sorted.z_start);
+            assert_eq!(gathered.src, sorted.src);
+            assert_eq!(gathered.clusters, sorted.clusters);
+            // Out of order: the counting sort.
+            let mut reversed = fine.vertex.clone();
+            reversed.reverse();
+            let shuffled = Sources {
+                finer_vertices: Some(&reversed),
+                ..restriction
+            };
+            let mut ws = Workspace::default();
+            ws.sort_by_row_with(&shuffled, &geom, 2, true);
+            assert_eq!(ws.staged.len(), fine.len());
+        }
+    }
     use crate::lighting_grid::geometry::MAX_LEVELS;
     use crate::rng::Rng;
 
