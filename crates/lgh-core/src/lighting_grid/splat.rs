@@ -290,6 +290,16 @@ pub(crate) fn corner_weight(f: Vec3, d: UVec3) -> f32 {
 /// coarsest levels of the all-scatter construction) is one band whatever its size.
 pub const BAND_SOURCES: usize = 1 << 15;
 
+/// Sources per task, at least, of the passes that go layer by layer: below this, a task
+/// costs rayon more than it saves.
+const LAYER_TASK_SOURCES: usize = 1 << 13;
+
+/// Layers per task of a pass over `layers` layers of `n` sources in all (see
+/// [`LAYER_TASK_SOURCES`]).
+fn layers_per_task(n: usize, layers: usize) -> usize {
+    (LAYER_TASK_SOURCES * layers / n.max(1)).max(1)
+}
+
 /// Sources per chunk of the parallel counting sort.
 /// (A chunk's bucketed sources, 320 KB with their cluster attributes 544 KB, stay in the L2
 /// cache.)
@@ -508,6 +518,7 @@ impl Workspace {
             .zip(cluster_layers)
             .zip(self.row_start[..r * r].par_chunks_mut(r))
             .enumerate()
+            .with_min_len(layers_per_task(n, r))
             .for_each(|(z, ((sorted, mut sorted_clusters), rows))| {
                 let mut next = vec![0usize; r + 1];
                 for piece in pieces(z) {
@@ -556,7 +567,11 @@ impl Workspace {
     ) -> bool {
         let key = |u: &UVec3| (u.z, u.y);
         let in_grid = |u: &UVec3| u.max_element() as usize <= 2 * r;
-        if !v.par_windows(2).all(|w| key(&w[0]) <= key(&w[1])) || !v.par_iter().all(in_grid) {
+        let in_order = v
+            .par_windows(2)
+            .with_min_len(LAYER_TASK_SOURCES)
+            .all(|w| key(&w[0]) <= key(&w[1]));
+        if !in_order || !v.par_iter().with_min_len(LAYER_TASK_SOURCES).all(in_grid) {
             return false;
         }
         // Fine vertex row (y, z) is v[fine_rows[z side + y]..fine_rows[z side + y + 1]].
@@ -566,6 +581,7 @@ impl Workspace {
         self.fine_rows[..side * side]
             .par_chunks_mut(side)
             .enumerate()
+            .with_min_len(layers_per_task(v.len(), side))
             .for_each(|(z, rows)| {
                 let lo = v.partition_point(|u| (u.z as usize) < z);
                 let hi = v.partition_point(|u| (u.z as usize) <= z);
@@ -607,6 +623,7 @@ impl Workspace {
             .into_par_iter()
             .zip(split_buckets(&mut self.clusters, &self.z_start))
             .enumerate()
+            .with_min_len(layers_per_task(n, r))
             .for_each(|(z, (out, out_clusters))| {
                 let sources = (0..r).flat_map(|y| ranges(y, z)).flatten();
                 for (k, i) in sources.enumerate() {
@@ -992,8 +1009,9 @@ fn count_sorted<const FINER: bool>(ws: &Workspace) -> (usize, usize) {
             Vec3::new(fine.x, fine.y, 0.0),
         )
     };
-    (0..=ws.r)
+    (0..ws.r + 1)
         .into_par_iter()
+        .with_min_len(layers_per_task(ws.src.len(), r))
         .map(|m| {
             let sides = [r + 1, r + 1, fine_side, fine_side, fine_side, fine_side];
             count_layers(
