@@ -130,8 +130,9 @@ pub enum ComponentArg {
 pub struct RenderArgs {
     /// Scene file: .toml (scene file), .gltf, .glb or .obj, or a built-in scene:
     /// builtin:cornell (the default), builtin:cornell-moving-light (animated: a point light
-    /// crosses the room in 2 s) or builtin:emitter-room (2688 emissive triangles, for the pt
-    /// methods).
+    /// crosses the room in 2 s), builtin:cornell-moving-block (animated: the tall block turns
+    /// 90 degrees and slides 10 cm in 2 s) or builtin:emitter-room (2688 emissive triangles,
+    /// for the pt methods).
     pub scene: Option<PathBuf>,
     /// How the indirect light is computed (default: the lighting grid hierarchy; `brute` is
     /// the exact reference, slow).
