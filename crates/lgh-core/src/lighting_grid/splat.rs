@@ -8,9 +8,10 @@
 //! 1. every source gets its cell and in-cell fraction f, and is packed with its attributes
 //!    into 40 bytes (plus 28 for the mass, variance and mean of a source that stands for
 //!    several lights); the packed sources are sorted by cell row (z, then y) with a stable
-//!    two-pass counting sort (input order is kept within a row). The sort, not the
-//!    arithmetic, is what memory bandwidth limits, so each pass buckets into a per-thread
-//!    buffer that stays in the L2 cache and then copies it out in one stream;
+//!    two-pass counting sort (input order is kept within a row). The sort is bound by memory
+//!    bandwidth, so each pass buckets into a per-thread buffer that stays in the L2 cache
+//!    and then copies it out in one stream (a restriction needs no sort at all; see
+//!    [`Workspace::gather_rows`]);
 //! 2. vertex row (v_y, v_z) receives from the sources of the four cell rows
 //!    (v_y - 1 or v_y, v_z - 1 or v_z). Each vertex layer is cut into bands of consecutive
 //!    vertex rows holding about [`BAND_SOURCES`] sources; a band task reads its cell rows in
@@ -300,9 +301,8 @@ fn layers_per_task(n: usize, layers: usize) -> usize {
     (LAYER_TASK_SOURCES * layers / n.max(1)).max(1)
 }
 
-/// Sources per chunk of the parallel counting sort.
-/// (A chunk's bucketed sources, 320 KB with their cluster attributes 544 KB, stay in the L2
-/// cache.)
+/// Sources per chunk of the parallel counting sort: a chunk's bucketed sources (320 KB, 544
+/// KB with their cluster attributes) stay in the L2 cache.
 const SORT_CHUNK: usize = 1 << 13;
 
 /// One source, prepared for a level: its cell, in-cell fraction and attributes, packed so
