@@ -1194,6 +1194,18 @@ pub(crate) fn level_from_sums(
 mod tests {
     use super::*;
 
+    /// Unit-mass point sources without normals.
+    fn point_sources<'a>(positions: &'a [Vec3], intensity: &'a [Vec3]) -> Sources<'a> {
+        Sources {
+            positions,
+            intensity,
+            normals: None,
+            mass: None,
+            variance: None,
+            finer_vertices: None,
+        }
+    }
+
     /// The restriction's shortcut ([`Workspace::gather_rows`]) sorts exactly as the counting
     /// sort does, and is not taken for vertices out of vertex order.
     #[test]
@@ -1203,14 +1215,7 @@ mod tests {
             .map(|_| Vec3::new(rng.next_f32(), rng.next_f32() * 0.3, rng.next_f32()) * 4.0)
             .collect();
         let intensity = vec![Vec3::ONE; positions.len()];
-        let src = Sources {
-            positions: &positions,
-            intensity: &intensity,
-            normals: None,
-            mass: None,
-            variance: None,
-            finer_vertices: None,
-        };
+        let src = point_sources(&positions, &intensity);
         for l_max in 2..=6 {
             let geom = GridGeometry::new(Vec3::ZERO, Vec3::splat(4.0), l_max);
             let fine = splat(&src, &geom, 1);
@@ -1262,14 +1267,7 @@ mod tests {
                     )
                 })
                 .collect();
-            let src = Sources {
-                positions: &positions,
-                intensity: &intensity,
-                normals: None,
-                mass: None,
-                variance: None,
-                finer_vertices: None,
-            };
+            let src = point_sources(&positions, &intensity);
             let restriction = Sources {
                 finer_vertices: Some(&vertices),
                 ..src
