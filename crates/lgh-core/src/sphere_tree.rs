@@ -111,7 +111,7 @@ impl SphereTree {
         self.centres.is_empty()
     }
 
-    /// Sets every leaf's sphere to (c_i, rho_i + ranges[i]) and refits the inner spheres
+    /// Sets every leaf's sphere to (c_i, rho_i + `ranges[i]`) and refits the inner spheres
     /// (once per frame, after new random ranges).
     pub fn refit(&mut self, ranges: &[f32]) {
         for k in (0..self.nodes.len()).rev() {

@@ -204,7 +204,7 @@ pub fn blur(img: &[Vec3], g: &GBuffer, disc: &[bool], p: &BlurParams) -> Vec<Vec
 }
 
 /// [`blur`] of `N` images of the same G-buffer, in place: the walks are found once for all
-/// of them ([`runs`]), and one scratch image serves every pass.
+/// of them (`runs`), and one scratch image serves every pass.
 #[must_use]
 pub fn blur_n<const N: usize>(
     mut imgs: [Vec<Vec3>; N],

@@ -36,7 +36,7 @@ impl Sequence {
     /// so that the VPLs and the shadow samples are new) and filters it.
     ///
     /// # Errors
-    /// As [`render_frame`].
+    /// As [`crate::frame::render_frame`].
     pub fn render(
         &mut self,
         world: &World,

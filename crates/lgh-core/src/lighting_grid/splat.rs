@@ -11,7 +11,7 @@
 //!    two-pass counting sort (input order is kept within a row). The sort is bound by memory
 //!    bandwidth, so each pass buckets into a per-thread buffer that stays in the L2 cache
 //!    and then copies it out in one stream (a restriction needs no sort at all; see
-//!    [`Workspace::gather_rows`]);
+//!    `Workspace::gather_rows`);
 //! 2. vertex row (v_y, v_z) receives from the sources of the four cell rows
 //!    (v_y - 1 or v_y, v_z - 1 or v_z). Each vertex layer is cut into bands of consecutive
 //!    vertex rows holding about [`BAND_SOURCES`] sources; a band task reads its cell rows in
@@ -341,7 +341,7 @@ struct Cluster {
 
 /// Reusable working memory of the splat: a renderer that rebuilds its hierarchy every frame
 /// keeps one, so that no step pays for fresh memory (page faults cost about as much as the
-/// arithmetic here). After [`Workspace::sort_by_row`], the sources of cell row (y, z) are
+/// arithmetic here). After its sort by cell row, the sources of cell row (y, z) are
 /// `src[row_start[z r + y]..row_start[z r + y + 1]]`, in input order.
 #[derive(Debug, Default)]
 pub struct Workspace {
@@ -958,7 +958,7 @@ pub fn splat(src: &Sources, geom: &GridGeometry, level: u32) -> Level {
 /// same sort, one task per vertex layer marks the vertices it touches in a bit set of the
 /// layer (33 KB at 512 cells per axis: it stays in the L1 cache), with the same weight
 /// products as the splat, so the same weights are zero. Used to choose the number of levels.
-/// The sort stays in `ws`: [`splat_counted_into`] then builds the level without sorting again.
+/// The sort stays in `ws`, so that building the level next does not sort again.
 pub fn count_vertices(ws: &mut Workspace, src: &Sources, geom: &GridGeometry, level: u32) -> usize {
     ws.sort_by_row(src, geom, level);
     count_sorted::<false>(ws).0
