@@ -2,13 +2,17 @@
 //! over the G-buffer (LGH 2019 section 3.2; Tokuyoshi & Harada 2016 Algorithm 1).
 //!
 //! The image is cut into square tiles; each tile knows the depth range of the surfaces it
-//! sees. A light whose influence is a sphere (centre, radius) is listed in every tile that its
-//! projected bounding rectangle covers and whose depth range meets the sphere's; a light with
-//! infinite radius is listed everywhere. Lists keep the lights' order, so shading that walks
-//! them is deterministic. One binning module serves every tiled method.
+//! sees, and the bounding boxes of its surface points in [`DEPTH_SLICES`] slices of that
+//! range. A light whose influence is a sphere (centre, radius) is listed in every tile that
+//! its projected bounding rectangle covers, whose depth range meets the sphere's, and one of
+//! whose boxes the sphere meets; a light with infinite radius is listed everywhere. (The
+//! boxes are an extension: a GPU rasterising light volumes gets a similar cut from its depth
+//! test.) Lists keep the lights' order, so shading that walks them is deterministic. One
+//! binning module serves every tiled method.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use lgh_scene::camera::CameraFrame;
+use rayon::prelude::*;
 
 use crate::gbuffer::GBuffer;
 use crate::interleave::Lattice;
@@ -69,62 +73,71 @@ impl TileBins {
         centres: &[Vec3],
         radii: &[f32],
     ) -> Self {
-        let tile = tile.max(1) * lattice.n.max(1);
-        let tiles_x = g.width.div_ceil(tile);
-        let tiles_y = g.height.div_ceil(tile);
+        let n = lattice.n.max(1);
+        let bounds = AllBounds::new(g, n, tile.max(1) * n);
+        Self::from_bounds(
+            g,
+            frame,
+            &bounds,
+            (lattice.sy * n + lattice.sx) as usize,
+            centres,
+            radii,
+        )
+    }
+
+    /// The bins of sub-image `s` from the tile bounds of every sub-image.
+    fn from_bounds(
+        g: &GBuffer,
+        frame: &CameraFrame,
+        all: &AllBounds,
+        s: usize,
+        centres: &[Vec3],
+        radii: &[f32],
+    ) -> Self {
+        let (tile, tiles_x, tiles_y) = (all.tile, all.tiles_x, all.tiles_y);
         let n_tiles = (tiles_x * tiles_y) as usize;
-        // Depth range of each tile (empty range where the tile sees nothing).
-        let mut zmin = vec![f32::INFINITY; n_tiles];
-        let mut zmax = vec![f32::NEG_INFINITY; n_tiles];
-        for y in (lattice.sy..g.height).step_by(lattice.n.max(1) as usize) {
-            for x in (lattice.sx..g.width).step_by(lattice.n.max(1) as usize) {
-                let i = (y * g.width + x) as usize;
-                if g.is_hit(i) {
-                    let t = (y / tile * tiles_x + x / tile) as usize;
-                    zmin[t] = zmin[t].min(g.depth[i]);
-                    zmax[t] = zmax[t].max(g.depth[i]);
-                }
-            }
-        }
-        let rects: Vec<Option<[u32; 4]>> = centres
-            .iter()
-            .zip(radii)
-            .map(|(&c, &r)| {
-                screen_rect(frame, g.width, g.height, c, r)
-                    .map(|[x0, y0, x1, y1]| [x0 / tile, y0 / tile, x1 / tile, y1 / tile])
-            })
-            .collect();
         let depth = |i: usize| {
             let z = (centres[i] - frame.origin).dot(frame.forward);
             (z - radii[i], z + radii[i])
         };
-        let mut counts = vec![0u32; n_tiles + 1];
-        let visit = |f: &mut dyn FnMut(usize, usize)| {
-            for (i, r) in rects.iter().enumerate() {
-                let Some([tx0, ty0, tx1, ty1]) = *r else {
-                    continue;
-                };
-                let (lo, hi) = depth(i);
-                for ty in ty0..=ty1 {
-                    for tx in tx0..=tx1 {
-                        let t = (ty * tiles_x + tx) as usize;
-                        if zmin[t] <= hi && zmax[t] >= lo {
-                            f(t, i);
+        // The (tile, light) pairs, chunk by chunk of lights in parallel, in light order.
+        let pairs: Vec<Vec<(u32, u32)>> = (0..centres.len())
+            .into_par_iter()
+            .step_by(BIN_CHUNK)
+            .map(|start| {
+                let mut pairs = Vec::new();
+                for i in start..(start + BIN_CHUNK).min(centres.len()) {
+                    let Some([x0, y0, x1, y1]) =
+                        screen_rect(frame, g.width, g.height, centres[i], radii[i])
+                    else {
+                        continue;
+                    };
+                    let (lo, hi) = depth(i);
+                    for ty in y0 / tile..=y1 / tile {
+                        for tx in x0 / tile..=x1 / tile {
+                            if all.get(s, tx, ty).may_reach(lo, hi, centres[i], radii[i]) {
+                                pairs.push((ty * tiles_x + tx, i as u32));
+                            }
                         }
                     }
                 }
-            }
-        };
-        visit(&mut |t, _| counts[t + 1] += 1);
+                pairs
+            })
+            .collect();
+        // Stable counting sort by tile: each tile's lights stay in light order.
+        let mut counts = vec![0u32; n_tiles + 1];
+        for &(t, _) in pairs.iter().flatten() {
+            counts[t as usize + 1] += 1;
+        }
         for t in 0..n_tiles {
             counts[t + 1] += counts[t];
         }
         let mut next = counts.clone();
         let mut lights = vec![0u32; counts[n_tiles] as usize];
-        visit(&mut |t, i| {
-            lights[next[t] as usize] = i as u32;
-            next[t] += 1;
-        });
+        for &(t, i) in pairs.iter().flatten() {
+            lights[next[t as usize] as usize] = i;
+            next[t as usize] += 1;
+        }
         Self {
             tile,
             tiles_x,
@@ -132,6 +145,139 @@ impl TileBins {
             offsets: counts,
             lights,
         }
+    }
+}
+
+/// Lights per task of the binning.
+const BIN_CHUNK: usize = 4096;
+
+/// The [`TileBounds`] of every tile of every sub-image of n x n interleaving (n = 1: the
+/// image), found in one pass over the G-buffer, in parallel over rows of tiles.
+struct AllBounds {
+    /// Tile edge in full-resolution pixels.
+    tile: u32,
+    tiles_x: u32,
+    tiles_y: u32,
+    n2: usize,
+    /// Tile (tx, ty) of sub-image s is entry (ty n^2 + s) tiles_x + tx.
+    bounds: Vec<TileBounds>,
+}
+
+impl AllBounds {
+    fn new(g: &GBuffer, n: u32, tile: u32) -> Self {
+        let tiles_x = g.width.div_ceil(tile);
+        let tiles_y = g.height.div_ceil(tile);
+        let n2 = (n * n) as usize;
+        let mut bounds = vec![TileBounds::EMPTY; tiles_y as usize * n2 * tiles_x as usize];
+        bounds
+            .par_chunks_mut(n2 * tiles_x as usize)
+            .enumerate()
+            .for_each(|(ty, row)| {
+                let ys = ty as u32 * tile..((ty as u32 + 1) * tile).min(g.height);
+                // Pixel (x, y) of the row of tiles is in entry k of `row` (sub-image s, tile
+                // tx), counted along x instead of divided.
+                let visit = |f: &mut dyn FnMut(usize, usize)| {
+                    for y in ys.clone() {
+                        let (first_s, start) = (((y % n) * n) as usize, (y * g.width) as usize);
+                        let (mut phase, mut in_tile, mut tx) = (0u32, 0u32, 0usize);
+                        for i in start..start + g.width as usize {
+                            if g.is_hit(i) {
+                                f((first_s + phase as usize) * tiles_x as usize + tx, i);
+                            }
+                            phase += 1;
+                            if phase == n {
+                                phase = 0;
+                            }
+                            in_tile += 1;
+                            if in_tile == tile {
+                                (in_tile, tx) = (0, tx + 1);
+                            }
+                        }
+                    }
+                };
+                visit(&mut |k, i| {
+                    row[k].zmin = row[k].zmin.min(g.depth[i]);
+                    row[k].zmax = row[k].zmax.max(g.depth[i]);
+                });
+                visit(&mut |k, i| row[k].add(g.depth[i], g.position[i]));
+            });
+        Self {
+            tile,
+            tiles_x,
+            tiles_y,
+            n2,
+            bounds,
+        }
+    }
+
+    /// Tile (`tx`, `ty`) of sub-image `s`.
+    #[inline]
+    fn get(&self, s: usize, tx: u32, ty: u32) -> &TileBounds {
+        &self.bounds[(ty as usize * self.n2 + s) * self.tiles_x as usize + tx as usize]
+    }
+}
+
+/// Depth slices of a tile's range that get their own bounding box of surface points (the
+/// lanes of a `Vec4`): a tile that sees a column in front of a far wall then does not list
+/// the lights in between. A sphere's screen rectangle and depth range bound its box, about
+/// twice its volume, so without the boxes about half the listed lights never reach a pixel.
+/// Measured with `lgh` on Sponza (320x180, 10K VPLs, 16-pixel tiles), lights evaluated per
+/// pixel with the rectangle and depth range alone, one box and four: 620, 316 and 265 (161
+/// reach the pixel), lighting 96, 70 and 63 ms; eight slices gain no more. On the Cornell
+/// box at 1280x720 with 100K VPLs, lighting 604-612 -> 493 ms, and 91-111 -> 78-83 ms with
+/// 4x4 interleaving, for 6 ms more binning.
+pub const DEPTH_SLICES: usize = 4;
+
+/// What a tile sees: the depth range of its surface points and, per slice of that range, the
+/// bounding box of the points in it, stored axis by axis with the slices in SIMD lanes (an
+/// empty box has lo = +inf and hi = -inf, so that nothing is near it).
+#[derive(Clone, Copy, Debug)]
+struct TileBounds {
+    zmin: f32,
+    zmax: f32,
+    lo: [[f32; DEPTH_SLICES]; 3],
+    hi: [[f32; DEPTH_SLICES]; 3],
+}
+
+impl TileBounds {
+    const EMPTY: Self = Self {
+        zmin: f32::INFINITY,
+        zmax: f32::NEG_INFINITY,
+        lo: [[f32::INFINITY; DEPTH_SLICES]; 3],
+        hi: [[f32::NEG_INFINITY; DEPTH_SLICES]; 3],
+    };
+
+    /// Adds a surface point at depth `z` (within the depth range, set before) to its slice's
+    /// box.
+    fn add(&mut self, z: f32, p: Vec3) {
+        let span = self.zmax - self.zmin;
+        let k = if span > 0.0 {
+            (((z - self.zmin) / span * DEPTH_SLICES as f32) as usize).min(DEPTH_SLICES - 1)
+        } else {
+            0
+        };
+        for (a, v) in p.to_array().into_iter().enumerate() {
+            self.lo[a][k] = self.lo[a][k].min(v);
+            self.hi[a][k] = self.hi[a][k].max(v);
+        }
+    }
+
+    /// False only if no surface point of the tile can lie in the sphere (`c`, `r`) of depth
+    /// range [`lo`, `hi`]: the ranges do not meet, or the sphere misses every slice's box.
+    #[inline]
+    fn may_reach(&self, lo: f32, hi: f32, c: Vec3, r: f32) -> bool {
+        if self.zmin > hi || self.zmax < lo {
+            return false;
+        }
+        // Squared distance from c to each box, four boxes at once.
+        let mut d2 = Vec4::ZERO;
+        for (a, ca) in c.to_array().into_iter().enumerate() {
+            let ca = Vec4::splat(ca);
+            let (lo, hi) = (Vec4::from_array(self.lo[a]), Vec4::from_array(self.hi[a]));
+            let d = (lo - ca).max(ca - hi).max(Vec4::ZERO);
+            d2 += d * d;
+        }
+        d2.cmple(Vec4::splat(r * r)).any()
     }
 }
 
@@ -206,13 +352,14 @@ impl InterleavedBins {
         for (i, &s) in sub.iter().enumerate() {
             members[usize::from(s)].push(i as u32);
         }
-        let bins = Lattice::all(n)
-            .into_par_iter()
-            .zip(&members)
-            .map(|(lattice, m)| {
+        let all = AllBounds::new(g, n, tile.max(1) * n);
+        let bins = members
+            .par_iter()
+            .enumerate()
+            .map(|(s, m)| {
                 let c: Vec<Vec3> = m.iter().map(|&i| centres[i as usize]).collect();
                 let r: Vec<f32> = m.iter().map(|&i| radii[i as usize]).collect();
-                TileBins::build_lattice(g, frame, tile, lattice, &c, &r)
+                TileBins::from_bounds(g, frame, &all, s, &c, &r)
             })
             .collect();
         Self { n, members, bins }
