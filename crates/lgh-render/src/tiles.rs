@@ -148,6 +148,32 @@ impl TileBins {
     }
 }
 
+/// For pixels (0, y), (1, y), ... (`width` of them) under n x n interleaving with tiles of
+/// `tile` full-resolution pixels: the column phase x mod n, the sub-image and the tile
+/// column x / tile, found by counting instead of dividing.
+fn row_phases(
+    y: u32,
+    width: u32,
+    n: u32,
+    tile: u32,
+) -> impl Iterator<Item = (usize, usize, usize)> {
+    let s0 = ((y % n) * n) as usize;
+    // (x mod n, x mod tile, x / tile)
+    (0..width).scan((0u32, 0u32, 0usize), move |(phase, in_tile, tx), _| {
+        let out = (*phase as usize, s0 + *phase as usize, *tx);
+        *phase += 1;
+        if *phase == n {
+            *phase = 0;
+        }
+        *in_tile += 1;
+        if *in_tile == tile {
+            *in_tile = 0;
+            *tx += 1;
+        }
+        Some(out)
+    })
+}
+
 /// Lights per task of the binning.
 const BIN_CHUNK: usize = 4096;
 
@@ -178,19 +204,10 @@ impl AllBounds {
                 // tx), counted along x instead of divided.
                 let visit = |f: &mut dyn FnMut(usize, usize)| {
                     for y in ys.clone() {
-                        let (first_s, start) = (((y % n) * n) as usize, (y * g.width) as usize);
-                        let (mut phase, mut in_tile, mut tx) = (0u32, 0u32, 0usize);
-                        for i in start..start + g.width as usize {
+                        let start = (y * g.width) as usize;
+                        for (i, (_, s, tx)) in (start..).zip(row_phases(y, g.width, n, tile)) {
                             if g.is_hit(i) {
-                                f((first_s + phase as usize) * tiles_x as usize + tx, i);
-                            }
-                            phase += 1;
-                            if phase == n {
-                                phase = 0;
-                            }
-                            in_tile += 1;
-                            if in_tile == tile {
-                                (in_tile, tx) = (0, tx + 1);
+                                f(s * tiles_x as usize + tx, i);
                             }
                         }
                     }
@@ -384,22 +401,8 @@ impl InterleavedBins {
             .bins
             .first()
             .map_or((1, 0), |b| (b.tile.max(1), b.tiles_x));
-        let s0 = ((y % n) * n) as usize;
         let row_base = ((y / tile) * tiles_x) as usize;
-        // (x mod n, x mod tile, x / tile)
-        (0..width).scan((0u32, 0u32, 0usize), move |(phase, in_tile, tx), _| {
-            let out = (*phase as usize, (s0 + *phase as usize, row_base + *tx));
-            *phase += 1;
-            if *phase == n {
-                *phase = 0;
-            }
-            *in_tile += 1;
-            if *in_tile == tile {
-                *in_tile = 0;
-                *tx += 1;
-            }
-            Some(out)
-        })
+        row_phases(y, width, n, tile).map(move |(phase, s, tx)| (phase, (s, row_base + tx)))
     }
 
     /// The global indices of the lights listed for full-resolution pixel (x, y) in its

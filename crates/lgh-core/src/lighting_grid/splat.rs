@@ -642,10 +642,15 @@ impl Workspace {
 }
 
 /// `v` cut into the consecutive buckets `z_start[z]..z_start[z + 1]`.
-fn split_buckets<'a, T>(mut rest: &'a mut [T], z_start: &[usize]) -> Vec<&'a mut [T]> {
-    let mut out = Vec::with_capacity(z_start.len() - 1);
-    for w in z_start.windows(2) {
-        let (head, tail) = rest.split_at_mut(w[1] - w[0]);
+fn split_buckets<'a, T>(v: &'a mut [T], z_start: &[usize]) -> Vec<&'a mut [T]> {
+    split_lengths(v, z_start.windows(2).map(|w| w[1] - w[0]))
+}
+
+/// `v` cut into consecutive pieces of the given lengths.
+fn split_lengths<T>(mut rest: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut out = Vec::with_capacity(lengths.size_hint().0);
+    for len in lengths {
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut(len);
         out.push(head);
         rest = tail;
     }
@@ -908,13 +913,7 @@ fn concat_into<T: Copy + Default + Send + Sync>(
     get: impl Fn(&Level) -> &[T] + Sync,
 ) {
     out.resize(n, T::default());
-    let mut rest = &mut out[..];
-    let mut places = Vec::with_capacity(parts.len());
-    for p in parts {
-        let (head, tail) = std::mem::take(&mut rest).split_at_mut(get(p).len());
-        places.push(head);
-        rest = tail;
-    }
+    let places = split_lengths(out, parts.iter().map(|p| get(p).len()));
     let copy = |(dst, p): (&mut [T], &Level)| dst.copy_from_slice(get(p));
     // Below this, a parallel loop costs more than it saves.
     if n < 1 << 15 {
