@@ -64,6 +64,8 @@ impl TileBins {
     /// [`TileBins::build`] for one sub-image of interleaved sampling: tiles of `tile`
     /// sub-image pixels, that is `tile * n` full-resolution pixels, whose depth ranges only
     /// count the sub-image's pixels. [`TileBins::lights_at`] takes full-resolution pixels.
+    /// (It finds the tile bounds of every sub-image; [`InterleavedBins::build`] finds them
+    /// once for all.)
     #[must_use]
     pub fn build_lattice(
         g: &GBuffer,
