@@ -9,7 +9,7 @@ use glam::Vec3;
 use lgh_core::lighting_grid::synthetic::lights_on_surfaces;
 use lgh_core::lighting_grid::{Construction, GridBuilder, InputLights, LevelCount};
 use lgh_render::World;
-use lgh_render::vpl_gen::{PathNumbers, generate_vpls};
+use lgh_render::passes::vpl_gen::{PathNumbers, generate_vpls};
 
 use crate::bench_cmd::median;
 use crate::scene_arg::load_scene;

@@ -6,10 +6,12 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::Args;
 use lgh_core::timing::Timings;
-use lgh_render::gbuffer::GBuffer;
-use lgh_render::lgh::{LghSettings, render_lgh};
-use lgh_render::vpl_gen::{PathNumbers, generate_vpls};
-use lgh_render::{FrameMemory, World};
+use lgh_render::methods::MethodInputs;
+use lgh_render::methods::lgh::{LghSettings, LghStats, render_lgh};
+use lgh_render::passes::gbuffer::GBuffer;
+use lgh_render::passes::vpl_gen::{PathNumbers, generate_vpls};
+use lgh_render::settings::{ShadowSettings, Tiling};
+use lgh_render::{FrameMemory, RenderSettings, Silent, World};
 
 use crate::bench_cmd::median;
 use crate::render_cmd::parse_size;
@@ -30,9 +32,9 @@ pub struct RenderBenchArgs {
     /// Image size, WIDTHxHEIGHT (the paper uses 1280x720).
     #[arg(long, default_value = "640x360", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// alpha of the blending radii.
-    #[arg(long, default_value_t = 1.0)]
-    pub alpha: f32,
+    /// The LGH settings of every run.
+    #[command(flatten)]
+    pub lgh: LghSettings,
     /// Interleaving n (n x n sub-images) of the Table 3 runs, comma-separated (the paper's
     /// Table 3 compares 1, 2 and 4). Table 2 is without interleaving.
     #[arg(long, value_delimiter = ',', default_value = "1")]
@@ -68,7 +70,6 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
         g_times.push(t.elapsed().as_secs_f64() * 1e3);
     }
     let gbuffer_ms = median(g_times);
-    let eps = 0.01 * world.radius;
     let mut rows = Vec::new();
     for &n in &args.vpls {
         let t = Instant::now();
@@ -83,27 +84,34 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
             .into_iter()
             .chain(args.interleave.iter().filter(|&&n| n != 1).map(|&n| (4, n)));
         for (k, n) in runs {
-            let settings = LghSettings {
-                alpha: args.alpha,
-                shadow_samples: k,
-                interleave: n,
-                ..LghSettings::default()
+            let settings = RenderSettings {
+                width: w,
+                height: h,
+                lgh: args.lgh.clone(),
+                shadows: ShadowSettings {
+                    samples: k,
+                    ..ShadowSettings::default()
+                },
+                tiling: Tiling {
+                    interleave: Some(n),
+                    ..Tiling::default()
+                },
+                ..RenderSettings::default()
+            };
+            settings.validate()?;
+            let inputs = MethodInputs {
+                world: &world,
+                gbuffer: &g,
+                camera: &frame,
+                vpls: &set.vpls,
+                settings: &settings,
+                progress: &Silent,
             };
             let mut samples: Vec<(Timings, f64)> = Vec::new();
             let mut last = None;
             for _ in 0..args.runs {
                 let start = Instant::now();
-                let out = render_lgh(
-                    &world,
-                    &g,
-                    &frame,
-                    &set.vpls,
-                    eps,
-                    &settings,
-                    0,
-                    k > 0,
-                    &mut memory,
-                )?;
+                let out = render_lgh(&inputs, k > 0, &mut memory)?;
                 let total = start.elapsed().as_secs_f64() * 1e3;
                 samples.push((
                     out.timings.clone(),
@@ -111,7 +119,9 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
                 ));
                 last = Some(out);
             }
-            let Some(out) = last else { continue };
+            let Some(stats) = last.as_ref().and_then(|o| o.stats::<LghStats>()) else {
+                continue;
+            };
             let get = |name: &str| {
                 median(
                     samples
@@ -132,9 +142,9 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
                     "shadow_filter_ms": get("shadow_filter"),
                     "composite_ms": get("composite"),
                     "render_ms": median(samples.iter().map(|s| s.1).collect()),
-                    "avg_overdraw": out.avg_overdraw(&g),
-                    "grid_lights": out.grid_lights,
-                    "levels": out.levels,
+                    "avg_overdraw": stats.avg_overdraw,
+                    "grid_lights": stats.grid_lights,
+                    "levels": stats.levels,
                 }),
             );
         }
@@ -149,13 +159,13 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
     if args.json {
         println!(
             "{}",
-            serde_json::json!({"scene": name, "width": w, "height": h, "threads": threads, "alpha": args.alpha, "rows": rows})
+            serde_json::json!({"scene": name, "width": w, "height": h, "threads": threads, "alpha": args.lgh.alpha, "rows": rows})
         );
         return Ok(());
     }
     println!(
         "LGH render times on {name}, {w}x{h}, alpha {}, {threads} threads (ms)",
-        args.alpha
+        args.lgh.alpha
     );
     println!(
         "\nTable 2: {:>9} {:>9} {:>9} {:>11} {:>11} {:>11}",

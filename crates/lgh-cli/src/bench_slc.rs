@@ -6,10 +6,13 @@ use std::path::PathBuf;
 
 use anyhow::{Result, anyhow};
 use clap::Args;
-use lgh_render::metrics::diff;
-use lgh_render::pt::PtSettings;
-use lgh_render::slc::SlcSettings;
-use lgh_render::{Component, Frame, Image, Method, RenderSettings, Silent, World, render_frame};
+use lgh_render::image::metrics::diff;
+use lgh_render::methods::lgh::{LGH_UNSHADOWED, LghStats};
+use lgh_render::methods::pt::{PT_CLAMPED, PT_SLC, PT_UNIFORM, PtSettings, PtStats};
+use lgh_render::methods::slc::{SLC, SLC_CLAMPED, SlcStats};
+use lgh_render::methods::{Method, brute};
+use lgh_render::settings::{ShadowSettings, Tiling};
+use lgh_render::{Component, Frame, Image, RenderSettings, Silent, World, render_frame};
 
 use crate::render_cmd::parse_size;
 use crate::scene_arg::load_scene;
@@ -78,8 +81,8 @@ fn row(
         "vpls": vpls,
         "method": method,
         "ms": indirect_ms(f),
-        "avg_lights_per_pixel": f.slc.as_ref().map(|s| s.avg_lights_per_pixel),
-        "avg_overdraw": f.lgh.as_ref().map(|s| s.avg_overdraw),
+        "avg_lights_per_pixel": f.stats::<SlcStats>().map(|s| s.avg_lights_per_pixel),
+        "avg_overdraw": f.stats::<LghStats>().map(|s| s.avg_overdraw),
         "error_bound": eb,
         "rel_rmse": m.rel_rmse,
         "rel_bias": m.rel_bias,
@@ -96,30 +99,33 @@ pub fn run(args: &SlcBenchArgs) -> Result<()> {
         height: args.size.1,
         area_samples: 0,
         component: Component::Indirect,
+        shadows: ShadowSettings {
+            samples: 0,
+            ..ShadowSettings::default()
+        },
         ..RenderSettings::default()
+    };
+    let slc_tiling = Tiling {
+        interleave: Some(args.interleave),
+        ..Tiling::default()
     };
     let mut vpl_rows = Vec::new();
     for &n in &args.vpls {
         let s = RenderSettings {
             vpls: n,
-            method: Method::BruteUnshadowed,
+            method: brute::BRUTE_UNSHADOWED,
             ..base.clone()
         };
         let reference = render(&world, &s)?;
         let r = &reference.image;
         vpl_rows.push(row("brute-unshadowed", n, &reference, r, None)?);
-        let slc_settings = |eb: f32| SlcSettings {
-            error_bound: eb,
-            interleave: args.interleave,
-            shadow_samples: 0,
-            ..SlcSettings::default()
-        };
         let slc = render(
             &world,
             &RenderSettings {
                 vpls: n,
-                method: Method::Slc,
-                slc: slc_settings(args.error_bound),
+                method: SLC,
+                error_bound: Some(args.error_bound),
+                tiling: slc_tiling,
                 ..base.clone()
             },
         )?;
@@ -132,8 +138,9 @@ pub fn run(args: &SlcBenchArgs) -> Result<()> {
                 &world,
                 &RenderSettings {
                     vpls: n,
-                    method: Method::SlcClamped,
-                    slc: slc_settings(eb),
+                    method: SLC_CLAMPED,
+                    error_bound: Some(eb),
+                    tiling: slc_tiling,
                     ..base.clone()
                 },
             )
@@ -161,7 +168,7 @@ pub fn run(args: &SlcBenchArgs) -> Result<()> {
             &world,
             &RenderSettings {
                 vpls: n,
-                method: Method::LghUnshadowed,
+                method: LGH_UNSHADOWED,
                 ..base.clone()
             },
         )?;
@@ -181,17 +188,17 @@ pub fn run(args: &SlcBenchArgs) -> Result<()> {
                     seed,
                     method,
                     component: Component::Indirect,
+                    error_bound: Some(args.pt_error_bound),
                     pt: PtSettings {
                         spp,
-                        error_bound: args.pt_error_bound,
                         ..PtSettings::default()
                     },
                     ..RenderSettings::default()
                 },
             )
         };
-        let reference = pt(Method::PtUniform, args.pt_reference_spp, 1_000_003)?;
-        for method in [Method::PtUniform, Method::PtSlc, Method::PtClamped] {
+        let reference = pt(PT_UNIFORM, args.pt_reference_spp, 1_000_003)?;
+        for method in [PT_UNIFORM, PT_SLC, PT_CLAMPED] {
             let probe = pt(method, 4, 7)?;
             let per_spp = indirect_ms(&probe) / 4.0;
             let spp = ((args.pt_budget_ms / per_spp.max(1e-3)) as u32).clamp(1, 1 << 16);
@@ -201,7 +208,7 @@ pub fn run(args: &SlcBenchArgs) -> Result<()> {
                 "method": method.name(),
                 "spp": spp,
                 "ms": indirect_ms(&f),
-                "avg_overlapping_lights": f.pt.as_ref().map(|p| p.avg_overlapping),
+                "avg_overlapping_lights": f.stats::<PtStats>().map(|p| p.avg_overlapping),
                 "rel_rmse": m.rel_rmse,
                 "rel_bias": m.rel_bias,
             }));

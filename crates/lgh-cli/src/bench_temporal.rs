@@ -7,9 +7,10 @@ use std::path::PathBuf;
 
 use anyhow::{Result, anyhow};
 use clap::Args;
+use lgh_render::denoise::temporal::{TemporalSettings, TemporalTarget};
+use lgh_render::methods::lgh::LGH;
 use lgh_render::sequence::{Sequence, flicker};
-use lgh_render::temporal::{TemporalSettings, TemporalTarget};
-use lgh_render::{Component, Method, RenderSettings, Silent, World};
+use lgh_render::{Component, RenderSettings, Silent, World};
 
 use crate::render_cmd::parse_size;
 use crate::scene_arg::load_scene;
@@ -77,7 +78,7 @@ pub fn run(args: &TemporalBenchArgs) -> Result<()> {
         height: args.size.1,
         vpls: args.vpls,
         area_samples: 0,
-        method: Method::Lgh,
+        method: LGH,
         component: Component::Indirect,
         ..RenderSettings::default()
     };
@@ -89,7 +90,7 @@ pub fn run(args: &TemporalBenchArgs) -> Result<()> {
     let (without, ms) = run_one(&world, &base, args.frames, None)?;
     // The flicker of the unshadowed lighting A alone: the part no shadow filter can remove.
     let mut no_shadows = base.clone();
-    no_shadows.lgh.shadow_samples = 0;
+    no_shadows.shadows.samples = 0;
     let (unshadowed, _) = run_one(&world, &no_shadows, args.frames, None)?;
     let (with_ratio, ms_ratio) = run_one(
         &world,

@@ -8,7 +8,7 @@ use glam::Vec3;
 use lgh_core::color::luminance;
 use lgh_render::Image;
 use lgh_render::image::ImageFormat;
-use lgh_render::metrics::{diff, display_bytes, flip_mean, mean_luminance};
+use lgh_render::image::metrics::{diff, display_bytes, flip_mean, mean_luminance};
 
 /// Compare image A against the reference B.
 #[derive(Debug, Args)]

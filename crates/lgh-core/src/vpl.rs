@@ -85,7 +85,9 @@ pub fn vpl_irradiance(x: Vec3, n_x: Vec3, p: Vec3, n_v: Vec3, flux: Vec3, eps2: 
 /// direction. The paper is silent; the design notes' choice (from the demo code) is
 /// [`GridEmission::MeanNormal`], which measured 28% too dark in a closed room, so this
 /// project's default is [`GridEmission::EnergyConserving`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
 pub enum GridEmission {
     /// `max(0, m . w)` with m the weighted mean normal, not renormalised (the demo code): a
     /// cluster whose normals disagree (a room's corner) has |m| < 1 and loses that share of
@@ -97,6 +99,8 @@ pub enum GridEmission {
     /// over the sphere, its zeroth spherical-harmonic band). Exact for one VPL (|m| = 1). An
     /// extension of this project, not in the paper; the default.
     #[default]
+    #[cfg_attr(feature = "clap", value(name = "energy"))]
+    #[serde(rename = "energy")]
     EnergyConserving,
 }
 

@@ -1,67 +1,52 @@
 //! # lgh-render: the CPU renderer
 //!
-//! Ray tracing, the passes of a frame and image files. [`frame`] is the recipe of a frame and
-//! the best place to start reading.
+//! Ray tracing, the passes of a frame, the many-lights methods and image files.
+//! [`frame`] is the recipe of a frame and the best place to start reading; [`methods`] holds
+//! one folder per indirect-lighting method behind one contract.
 //!
 //! | module | what it does |
 //! | --- | --- |
-//! | [`accel`] | BVH over all triangles: closest-hit and any-hit rays |
-//! | [`world`] | a scene prepared for rendering; surface points; shadow-ray offsets |
-//! | [`lights`] | primary lights, sampled by power (light paths) or per area (direct light) |
-//! | [`gbuffer`] | primary visibility: position, normal, albedo, depth, emission |
-//! | [`direct`] | direct lighting with exact shadow rays |
-//! | [`vpl_gen`] | VPLs by light tracing |
-//! | [`brute`] | the brute-force many-lights reference |
-//! | [`lgh`] | lighting grid hierarchy rendering: tiled lighting, shadow selection, ratio estimator |
-//! | [`tiles`] | screen-tile binning of light volumes (shared by the tiled methods) |
-//! | [`atrous`] | edge-avoiding a-trous filter |
-//! | [`interleave`] | interleaved sampling: sub-image lattices, split/merge, discontinuity-aware blur |
-//! | [`slc`] | stochastic light culling: stochastic and clamped tiled lighting |
-//! | [`pt`] | progressive path tracing with many area lights: SLC light sampling and baselines |
-//! | [`temporal`], [`sequence`] | temporal filtering of shadows; frame sequences and flicker |
-//! | [`ratio`] | ray-traced shadows through the ratio estimator (shared by LGH and SLC) |
-//! | [`frame`] | the passes in order, with timings |
-//! | [`image`], [`tonemap`], [`metrics`] | EXR/PNG files, tone mapping, image differences |
-//! | [`raybench`] | ray throughput measurement |
+//! | [`frame`] | the recipe: the passes of a frame in order, with timings |
+//! | [`settings`] | every setting of a frame (the command line derives its flags from them) |
+//! | [`world`] | a scene prepared for rendering: BVH ([`world::accel`]), primary lights ([`world::lights`]), surface points, shadow-ray offsets |
+//! | [`passes`] | the passes every frame runs: G-buffer, direct light, VPLs by light tracing |
+//! | [`methods`] | the indirect-lighting methods (`brute`, `lgh`, `slc`, `pt`) and their contract |
+//! | [`shading`] | machinery the tiled methods share: tile binning, interleaved sampling, the ratio estimator |
+//! | [`denoise`] | the edge-avoiding a-trous filter and the temporal filter |
+//! | [`sequence`] | frame sequences with temporal filtering; flicker |
+//! | [`memory`] | working memory frames reuse |
+//! | [`image`] | EXR/PNG files, tone mapping, image metrics |
+//! | [`progress`], [`raybench`] | progress reporting; ray throughput |
 //!
 //! Every pass is parallel (rayon) and deterministic: the same seed gives the same image
 //! whatever the thread count.
+//!
+//! # Feature flags
+//! - `clap`: the settings structs are `clap::Args` and their enums `clap::ValueEnum`, so a
+//!   command line can take them as flags (the `lgh` binary does).
 #![deny(missing_docs)]
 #![cfg_attr(
     not(test),
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
-pub mod accel;
-pub mod atrous;
-pub mod brute;
-pub mod direct;
+pub mod denoise;
 pub mod frame;
-pub mod gbuffer;
 pub mod image;
-pub mod interleave;
-pub mod ism;
-pub mod lgh;
-pub mod light_batch;
-pub mod lights;
-pub mod metrics;
+pub mod memory;
+pub mod methods;
 pub mod passes;
 pub mod progress;
-pub mod pt;
-pub mod ratio;
 pub mod raybench;
 pub mod sequence;
-pub mod slc;
-pub mod temporal;
-pub mod tiles;
-pub mod tonemap;
-pub mod vpl_gen;
+pub mod settings;
+pub mod shading;
 pub mod world;
 
-pub use frame::{
-    Component, Frame, FrameMemory, LghStats, Method, PtStats, RenderError, RenderSettings,
-    SlcStats, render_frame, render_frame_with,
-};
+pub use frame::{Frame, render_frame, render_frame_with};
 pub use image::Image;
+pub use memory::FrameMemory;
+pub use methods::{METHODS, Method, MethodOutput};
 pub use progress::{Progress, Silent};
+pub use settings::{Component, RenderError, RenderSettings, SettingsError};
 pub use world::World;

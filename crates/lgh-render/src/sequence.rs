@@ -1,14 +1,16 @@
 //! Frame sequences: every frame regenerates its VPLs (LGH 2019 section 4: "when the lighting
 //! condition changes, we regenerate all VPLs"), rebuilds the hierarchy, and optionally passes
-//! through the temporal filter of [`crate::temporal`], and the flicker metric that measures
+//! through the temporal filter of [`crate::denoise::temporal`], and the flicker metric that measures
 //! how much a static view changes from frame to frame.
 
 use glam::Vec3;
 
-use crate::frame::{Frame, FrameMemory, RenderError, RenderSettings, render_frame_with};
+use crate::denoise::temporal::{TemporalFilter, TemporalSettings, TemporalTarget};
+use crate::frame::{Frame, render_frame_with};
+use crate::memory::FrameMemory;
 use crate::progress::Progress;
-use crate::ratio::composite;
-use crate::temporal::{TemporalFilter, TemporalSettings, TemporalTarget};
+use crate::settings::{RenderError, RenderSettings};
+use crate::shading::ratio::composite;
 use crate::world::World;
 
 /// Renders frames one after another, keeping the temporal history.
@@ -47,7 +49,7 @@ impl Sequence {
         let Some(taa) = self.taa else {
             return Ok(f);
         };
-        let indirect = match (taa.target, &f.unshadowed, &f.shadow_ratio) {
+        let indirect = match (taa.target, &f.method.unshadowed, &f.method.shadow_ratio) {
             (TemporalTarget::ShadowRatio, Some(a), Some(ratio)) => {
                 let r = &ratio.filtered;
                 let ratio = self.filter.apply(f.camera, &f.gbuffer, r, &ratio.raw, &taa);
@@ -70,9 +72,9 @@ impl Sequence {
 
 impl Sequence {
     /// Hands back a frame the caller is done with: the next frame reuses its memory
-    /// ([`FrameMemory::recycle`]).
+    /// ([`FrameMemory::recycle_gbuffer`]).
     pub fn recycle(&mut self, frame: Frame) {
-        self.memory.recycle(frame);
+        self.memory.recycle_gbuffer(frame.gbuffer);
     }
 }
 

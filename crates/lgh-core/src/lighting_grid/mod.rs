@@ -70,12 +70,50 @@ pub enum LevelCount {
     Fixed(u32),
 }
 
+impl serde::Serialize for LevelCount {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+impl std::fmt::Display for LevelCount {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Auto => f.write_str("auto"),
+            Self::Fixed(l) => write!(f, "{l}"),
+        }
+    }
+}
+
+impl std::str::FromStr for LevelCount {
+    type Err = String;
+
+    /// `auto` or a number of levels from 1 to [`MAX_LEVELS`].
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "auto" => Ok(Self::Auto),
+            s => match s.parse::<u32>() {
+                Ok(l) if (1..=MAX_LEVELS).contains(&l) => Ok(Self::Fixed(l)),
+                _ => Err(format!(
+                    "'{s}': expected 'auto' or a number from 1 to {MAX_LEVELS}"
+                )),
+            },
+        }
+    }
+}
+
 /// Which lights the levels l >= 2 are built from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
 pub enum Construction {
-    /// From the grid lights of S_1 (the paper's method; Table 1, right column).
+    /// From the grid lights of S_1 (the paper's method, section 3.1; Table 1, right column).
+    #[cfg_attr(feature = "clap", value(name = "gather"))]
+    #[serde(rename = "gather")]
     GatherFromS1,
-    /// Every level from the input lights (Table 1, left column).
+    /// Every level from the input lights (the paper's baseline; Table 1, left column).
+    #[cfg_attr(feature = "clap", value(name = "scatter"))]
+    #[serde(rename = "scatter")]
     ScatterAll,
     /// Each level l >= 2 from the grid lights of level l - 1 by exact restriction (an
     /// extension; see [`splat::Level::as_restriction_sources`]): the all-scatter hierarchy,

@@ -1,0 +1,145 @@
+//! The arguments of `lgh render`: the output, the sequence and the process; every rendering
+//! setting comes from the library's [`RenderSettings`] (flattened).
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use lgh_render::RenderSettings;
+use lgh_render::denoise::temporal::TemporalSettings;
+
+/// Render a scene to an image.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Scene file: .toml (scene file), .gltf, .glb or .obj, or a built-in scene:
+    /// builtin:cornell (the default), builtin:cornell-moving-light (animated: a point light
+    /// crosses the room in 2 s), builtin:cornell-moving-block (animated: the tall block turns
+    /// 90 degrees and slides 10 cm in 2 s) or builtin:emitter-room (2688 emissive triangles,
+    /// for the pt methods).
+    pub scene: Option<PathBuf>,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x360", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Output image: .png (exposure, ACES filmic tone map, sRGB) or .exr (linear radiance).
+    #[arg(long, short, default_value = "lgh.png")]
+    pub out: PathBuf,
+    /// Write statistics (sizes, counts, per-pass timings in ms) as JSON to this file.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+    /// lgh, slc: write the per-pixel lights evaluated (the LGH paper's overdraw, Fig. 5) as a
+    /// colour map with a legend bar to this PNG.
+    #[arg(long)]
+    pub heatmap: Option<PathBuf>,
+    /// The rendering settings.
+    #[command(flatten)]
+    pub settings: RenderSettings,
+    /// Render a sequence of frames A..B (B excluded, e.g. 0..48) of the scene's animation;
+    /// --out must then contain #### (replaced by the zero-padded frame number). VPLs and all
+    /// random numbers are new in every frame (seed + frame number).
+    #[arg(long, value_parser = parse_frames)]
+    pub frames: Option<(u32, u32)>,
+    /// Frames per second of the sequence (frame f shows time f / fps).
+    #[arg(long, default_value_t = 24.0)]
+    pub fps: f32,
+    /// Temporal filtering of the shadows across the frames of a sequence (LGH paper 4.3).
+    #[arg(long)]
+    pub taa: bool,
+    /// The temporal filter.
+    #[command(flatten)]
+    pub temporal: TemporalSettings,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// No progress bars and no summary.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+impl RenderArgs {
+    /// The rendering settings with the image size of `--size`.
+    #[must_use]
+    pub fn render_settings(&self) -> RenderSettings {
+        RenderSettings {
+            width: self.size.0,
+            height: self.size.1,
+            ..self.settings.clone()
+        }
+    }
+}
+
+/// Parses `A..B` (frames A to B - 1).
+pub fn parse_frames(s: &str) -> Result<(u32, u32), String> {
+    let (a, b) = s
+        .split_once("..")
+        .ok_or_else(|| format!("'{s}' is not A..B (e.g. 0..48)"))?;
+    let a: u32 = a
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}': A is not a number"))?;
+    let b: u32 = b
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}': B is not a number"))?;
+    if b <= a {
+        return Err(format!("'{s}': B must be larger than A"));
+    }
+    Ok((a, b))
+}
+
+/// The output path of frame `f`: the run of '#' in `pattern` replaced by `f`, zero-padded to
+/// the run's length.
+#[must_use]
+pub fn frame_path(pattern: &Path, f: u32) -> PathBuf {
+    let text = pattern.to_string_lossy();
+    let Some(start) = text.find('#') else {
+        return pattern.to_path_buf();
+    };
+    let len = text[start..].chars().take_while(|&c| c == '#').count();
+    let mut out = String::new();
+    out.push_str(&text[..start]);
+    out.push_str(&format!("{f:0len$}"));
+    out.push_str(&text[start + len..]);
+    PathBuf::from(out)
+}
+
+/// Parses `WIDTHxHEIGHT` with both sides positive.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT (e.g. 640x360)"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}': width is not a number"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}': height is not a number"))?;
+    if w == 0 || h == 0 {
+        return Err(format!("'{s}': width and height must be at least 1"));
+    }
+    if u64::from(w) * u64::from(h) > lgh_render::settings::MAX_PIXELS {
+        return Err(format!("'{s}': image too large"));
+    }
+    Ok((w, h))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{frame_path, parse_frames, parse_size};
+
+    #[test]
+    fn sizes() {
+        assert_eq!(parse_size("640x360"), Ok((640, 360)));
+        assert!(parse_size("0x10").is_err());
+        assert!(parse_size("640").is_err());
+        assert!(parse_size("ax3").is_err());
+    }
+
+    #[test]
+    fn frames_and_their_paths() {
+        assert_eq!(parse_frames("0..48"), Ok((0, 48)));
+        assert!(parse_frames("5..5").is_err());
+        let p = frame_path(std::path::Path::new("out/f_####.png"), 7);
+        assert_eq!(p, std::path::PathBuf::from("out/f_0007.png"));
+    }
+}

@@ -1,0 +1,150 @@
+//! `lgh render`: one frame, or a sequence of frames, to image files.
+
+mod args;
+mod stats;
+
+use std::time::Instant;
+
+use anyhow::{Result, bail};
+use lgh_render::image::check_output_path;
+use lgh_render::sequence::Sequence;
+use lgh_render::{RenderSettings, World, render_frame};
+
+use args::frame_path;
+pub use args::{RenderArgs, parse_size};
+use stats::{FrameReport, ReportContext, write_json};
+
+use crate::progress_bar::Bars;
+use crate::scene_arg::load_scene;
+
+/// Checks what the library's validation does not: the output files and the sequence flags.
+fn check_args(args: &RenderArgs) -> Result<()> {
+    if args.frames.is_some() && !args.out.to_string_lossy().contains('#') {
+        bail!(
+            "{}: with --frames the output name needs #### for the frame number (e.g. frames/frame_####.png)",
+            args.out.display()
+        );
+    }
+    args.temporal.validate()?;
+    if !args.fps.is_finite() || args.fps <= 0.0 {
+        bail!("--fps {}: must be a positive number", args.fps);
+    }
+    check_output_path(&frame_path(&args.out, 0))?;
+    if let Some(stats) = &args.stats
+        && let Some(dir) = stats.parent()
+        && !dir.as_os_str().is_empty()
+        && !dir.is_dir()
+    {
+        bail!(
+            "{}: output folder {} does not exist",
+            stats.display(),
+            dir.display()
+        );
+    }
+    if let Some(h) = &args.heatmap {
+        check_output_path(h)?;
+    }
+    Ok(())
+}
+
+/// `--frames`: renders the sequence, one image per frame.
+fn run_sequence(
+    args: &RenderArgs,
+    mut world: World,
+    settings: &RenderSettings,
+    (first, end): (u32, u32),
+    exposure: f32,
+    bars: &Bars,
+) -> Result<()> {
+    let mut seq = Sequence::new(args.taa.then_some(args.temporal));
+    let mut per_frame = Vec::new();
+    for f in first..end {
+        let update = Instant::now();
+        world.set_time(f as f32 / args.fps);
+        let update_ms = update.elapsed().as_secs_f64() * 1e3;
+        let mut s = settings.clone();
+        s.seed = settings.seed.wrapping_add(u64::from(f));
+        s.slc.frame_seed = f;
+        let frame = seq.render(&world, &s, bars)?;
+        let path = frame_path(&args.out, f);
+        frame.image.save(&path, exposure)?;
+        let ms = frame.timings.get("total").unwrap_or(0.0);
+        per_frame
+            .push(serde_json::json!({"frame": f, "total_ms": ms, "scene_update_ms": update_ms}));
+        if !args.quiet {
+            eprintln!(
+                "frame {f}: {ms:.0} ms (+ {update_ms:.0} ms moving the scene) -> {}",
+                path.display()
+            );
+        }
+        seq.recycle(frame);
+    }
+    if let Some(path) = &args.stats {
+        let v = serde_json::json!({
+            "scene": world.scene.name,
+            "method": settings.method.name(),
+            "frames": per_frame,
+            "fps": args.fps,
+            "taa": args.taa,
+            "settings": settings,
+        });
+        write_json(path, &v)?;
+    }
+    Ok(())
+}
+
+pub fn run(args: &RenderArgs) -> Result<()> {
+    check_args(args)?;
+    let settings = args.render_settings();
+    settings.validate()?;
+    let threads = crate::set_threads(args.threads)?;
+    let start = Instant::now();
+    let scene = load_scene(args.scene.as_deref())?;
+    let load_ms = start.elapsed().as_secs_f64() * 1e3;
+    let exposure = settings.exposure_or(scene.exposure);
+    let scene_name = scene.name.clone();
+
+    let t = Instant::now();
+    let world = World::new(scene);
+    let bvh_ms = t.elapsed().as_secs_f64() * 1e3;
+
+    let bars = Bars::new(args.quiet);
+    if let Some(frames) = args.frames {
+        return run_sequence(args, world, &settings, frames, exposure, &bars);
+    }
+    let frame = render_frame(&world, &settings, &bars)?;
+    frame.image.save(&args.out, exposure)?;
+    if let (Some(path), Some(counts)) = (&args.heatmap, &frame.method.lights_per_pixel) {
+        let max = crate::heatmap::write(path, settings.width, settings.height, counts)?;
+        if !args.quiet {
+            eprintln!("heatmap: 0 (bottom of the bar) to {max} lights per pixel (top)");
+        }
+    }
+    if let Some(path) = &args.stats {
+        let context = ReportContext {
+            scene: &scene_name,
+            settings: &settings,
+            threads,
+            triangles: world.accel.len(),
+            load_ms,
+            bvh_ms,
+        };
+        write_json(path, &FrameReport::new(&frame, &context))?;
+    }
+    if !args.quiet {
+        eprintln!(
+            "{}: {}x{}, {} triangles, {} VPLs from {} light paths, {} in {:.0} ms ({} threads) -> {}",
+            scene_name,
+            settings.width,
+            settings.height,
+            world.accel.len(),
+            frame.vpls.vpls.len(),
+            frame.vpls.paths,
+            settings.method.name(),
+            frame.timings.get("total").unwrap_or(0.0) + bvh_ms,
+            threads,
+            args.out.display()
+        );
+    }
+    Ok(())
+}

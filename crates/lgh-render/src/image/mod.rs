@@ -1,0 +1,210 @@
+//! Linear RGB images and their files: OpenEXR (linear, full float) and PNG (tone-mapped
+//! sRGB, see [`tonemap`]); image differences in [`metrics`].
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use lgh_core::color::finite_or_zero;
+
+pub mod metrics;
+pub mod tonemap;
+
+use tonemap::tonemap_to_srgb8;
+
+/// A linear RGB image, row-major from the top-left pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Pixels (linear radiance).
+    pub pixels: Vec<Vec3>,
+}
+
+/// A problem reading or writing an image file.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {message}", path.display())]
+pub struct ImageError {
+    /// The file.
+    pub path: PathBuf,
+    /// What went wrong.
+    pub message: String,
+}
+
+impl ImageError {
+    fn new(path: &Path, message: impl Into<String>) -> Self {
+        Self {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+}
+
+/// The image file formats lgh writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// 8-bit sRGB PNG after exposure and tone mapping.
+    Png,
+    /// 32-bit float OpenEXR, linear radiance.
+    Exr,
+}
+
+impl ImageFormat {
+    /// The format named by a file's extension (`.png` or `.exr`, any case).
+    ///
+    /// # Errors
+    /// Any other extension.
+    pub fn from_path(path: &Path) -> Result<Self, ImageError> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("png") => Ok(Self::Png),
+            Some("exr") => Ok(Self::Exr),
+            _ => Err(ImageError::new(
+                path,
+                "unsupported image extension (expected .png or .exr)",
+            )),
+        }
+    }
+}
+
+impl Image {
+    /// A black image.
+    #[must_use]
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            pixels: vec![Vec3::ZERO; width as usize * height as usize],
+        }
+    }
+
+    /// An image from pixels; every non-finite component becomes zero.
+    #[must_use]
+    pub fn from_pixels(width: u32, height: u32, pixels: Vec<Vec3>) -> Self {
+        debug_assert_eq!(pixels.len(), width as usize * height as usize);
+        Self {
+            width,
+            height,
+            pixels: pixels.into_iter().map(finite_or_zero).collect(),
+        }
+    }
+
+    /// The pixel at (x, y).
+    #[must_use]
+    pub fn get(&self, x: u32, y: u32) -> Vec3 {
+        self.pixels[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Writes the image; the format follows the extension. `exposure` scales the radiance
+    /// before tone mapping (PNG only). The file appears whole or not at all: it is written
+    /// under a temporary name in the same folder and renamed.
+    ///
+    /// # Errors
+    /// Unknown extension, missing folder, or a write error.
+    pub fn save(&self, path: &Path, exposure: f32) -> Result<(), ImageError> {
+        let format = ImageFormat::from_path(path)?;
+        check_output_dir(path)?;
+        let file_name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let tmp = path.with_file_name(format!(".{file_name}.partial"));
+        let result = match format {
+            ImageFormat::Png => {
+                let bytes = tonemap_to_srgb8(&self.pixels, exposure);
+                image::save_buffer_with_format(
+                    &tmp,
+                    &bytes,
+                    self.width,
+                    self.height,
+                    image::ExtendedColorType::Rgb8,
+                    image::ImageFormat::Png,
+                )
+                .map_err(|e| e.to_string())
+            }
+            ImageFormat::Exr => exr::prelude::write_rgb_file(
+                &tmp,
+                self.width as usize,
+                self.height as usize,
+                |x, y| {
+                    let p = finite_or_zero(self.pixels[y * self.width as usize + x]);
+                    (p.x, p.y, p.z)
+                },
+            )
+            .map_err(|e| e.to_string()),
+        };
+        match result.and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string())) {
+            Ok(()) => Ok(()),
+            Err(e) => {
+                let _ = std::fs::remove_file(&tmp);
+                Err(ImageError::new(path, format!("cannot write image: {e}")))
+            }
+        }
+    }
+
+    /// Reads an EXR (linear, first RGB(A) layer) or PNG (8- or 16-bit; the sRGB curve is
+    /// undone, tone mapping is not) image.
+    ///
+    /// # Errors
+    /// Missing or unreadable file, unsupported extension.
+    pub fn load(path: &Path) -> Result<Self, ImageError> {
+        if !path.is_file() {
+            return Err(ImageError::new(path, "file not found"));
+        }
+        match ImageFormat::from_path(path)? {
+            ImageFormat::Exr => {
+                let img = exr::prelude::read_first_rgba_layer_from_file(
+                    path,
+                    |res, _| Image::new(res.width() as u32, res.height() as u32),
+                    |img: &mut Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                        let w = img.width as usize;
+                        img.pixels[pos.y() * w + pos.x()] = finite_or_zero(Vec3::new(r, g, b));
+                    },
+                )
+                .map_err(|e| ImageError::new(path, format!("cannot read EXR: {e}")))?;
+                Ok(img.layer_data.channel_data.pixels)
+            }
+            ImageFormat::Png => {
+                let img = image::open(path)
+                    .map_err(|e| ImageError::new(path, format!("cannot read PNG: {e}")))?
+                    .to_rgb32f();
+                let pixels = img
+                    .pixels()
+                    .map(|p| {
+                        Vec3::new(
+                            lgh_scene::texture::srgb_to_linear(p[0]),
+                            lgh_scene::texture::srgb_to_linear(p[1]),
+                            lgh_scene::texture::srgb_to_linear(p[2]),
+                        )
+                    })
+                    .collect();
+                Ok(Image::from_pixels(img.width(), img.height(), pixels))
+            }
+        }
+    }
+}
+
+/// Fails early, before any rendering, if `path` cannot be an output image: unknown extension
+/// or a folder that does not exist.
+///
+/// # Errors
+/// As above, naming the path.
+pub fn check_output_path(path: &Path) -> Result<(), ImageError> {
+    ImageFormat::from_path(path)?;
+    check_output_dir(path)
+}
+
+fn check_output_dir(path: &Path) -> Result<(), ImageError> {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => Err(ImageError::new(
+            path,
+            format!("output folder {} does not exist", dir.display()),
+        )),
+        _ => Ok(()),
+    }
+}

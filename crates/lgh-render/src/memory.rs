@@ -1,0 +1,35 @@
+//! Working memory that frames reuse.
+
+use lgh_core::lighting_grid::GridBuilder;
+
+use crate::denoise::atrous::AtrousBuffers;
+use crate::passes::gbuffer::GBuffer;
+
+/// Working memory that frames reuse: the hierarchy builder's and the shadow filter's (about
+/// 90 MB at 1280x720), and the G-buffer of a frame handed back with
+/// [`FrameMemory::recycle_gbuffer`]. A renderer of frame after frame keeps one
+/// ([`crate::frame::render_frame_with`]), so that no frame pays for paging in fresh memory.
+/// A clone is empty: it is only a cache.
+#[derive(Debug, Default)]
+pub struct FrameMemory {
+    /// The lighting grid hierarchy builder.
+    pub grid: GridBuilder,
+    /// The a-trous filter's planes.
+    pub filter: AtrousBuffers,
+    /// Planes for the next frame's G-buffer (1280x720: 57 MB).
+    pub gbuffer: Option<GBuffer>,
+}
+
+impl FrameMemory {
+    /// Takes back the G-buffer of a frame that is no longer needed, so that the next frame
+    /// renders into the same planes.
+    pub fn recycle_gbuffer(&mut self, g: GBuffer) {
+        self.gbuffer = Some(g);
+    }
+}
+
+impl Clone for FrameMemory {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}

@@ -1,0 +1,108 @@
+//! Settings of the LGH method, with its choices where the paper is silent
+//! (docs/design.md, "LGH: choices beyond the paper").
+
+use lgh_core::lighting_grid::{Construction, LevelCount};
+use lgh_core::vpl::GridEmission;
+
+/// Settings of the LGH method. The shadow sample count, the shadow filter and the
+/// interleaving are shared with `slc` ([`crate::settings::ShadowSettings`],
+/// [`crate::settings::Tiling`]).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+pub struct LghSettings {
+    /// lgh: alpha of the blending radii r_l = alpha h_l (larger = more accurate, slower).
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = LghSettings::default().alpha))]
+    pub alpha: f32,
+    /// lgh: number of hierarchy levels, `auto` (largest with |S1| < VPLs/2) or 1..=10.
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = LghSettings::default().levels))]
+    pub levels: LevelCount,
+    /// lgh: lowest level whose lights are shadow candidates (2 skips S1, as the paper; 0 adds
+    /// the VPLs when --start-level is 0).
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = LghSettings::default().shadow_from_level))]
+    pub shadow_from_level: u32,
+    /// lgh: lowest level shaded: 1 (S1, the paper's default) or 0 (the VPLs themselves).
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = LghSettings::default().start_level))]
+    pub start_level: u32,
+    /// Scale of the jitter of centroid shadow targets (the authors' DevScale).
+    #[cfg_attr(feature = "clap", arg(skip = LghSettings::default().dev_scale))]
+    pub dev_scale: f32,
+    /// lgh: how the levels above S_1 are built: `restrict` (exact, fastest; an extension),
+    /// `gather` from S_1 (the paper) or `scatter` from all VPLs (the paper's baseline).
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = LghSettings::default().construction))]
+    pub construction: Construction,
+    /// lgh: build six hierarchies, one per dominant normal direction of the VPLs (an
+    /// extension of the paper: grid lights then average only normals that roughly agree).
+    /// Better than one hierarchy with `--grid-emission mean-normal`, worse than the default
+    /// emission (docs/design.md, "Normal bins").
+    #[cfg_attr(feature = "clap", arg(long))]
+    pub normal_bins: bool,
+    /// lgh: how a grid light's emission depends on direction.
+    #[cfg_attr(feature = "clap", arg(long = "grid-emission", value_enum, default_value_t = LghSettings::default().emission))]
+    pub emission: GridEmission,
+    /// lgh: when a shadow sample's target (jittered centroid or representative VPL) is
+    /// drawn: per candidate before selection, weighting it by its contribution there (the
+    /// authors' demo), or only for the k selected samples when their rays are traced (the
+    /// default, faster).
+    #[cfg_attr(feature = "clap", arg(long = "jitter-at", value_enum, default_value_t = LghSettings::default().jitter))]
+    pub jitter: JitterAt,
+    /// lgh: where the shadow ray of a selected grid light goes: one of the VPLs it stands
+    /// for, drawn in proportion to its share (an extension, the default), or its jittered
+    /// centroid (the paper; centroids inside objects or walls darken the image).
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = LghSettings::default().shadow_target))]
+    pub shadow_target: ShadowTarget,
+}
+
+/// Where the shadow ray of a selected grid light goes (docs/design.md, "Shadow targets").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum ShadowTarget {
+    /// The grid light's centroid, jittered by its deviation (the paper and the demo).
+    /// Centroids that fall inside objects or walls report their light as occluded.
+    Centroid,
+    /// One of the VPLs the grid light stands for, drawn in proportion to its share
+    /// ([`lgh_core::lighting_grid::representative`]; an extension, the default), then among
+    /// the light's representatives by contribution (see [`JitterAt`]).
+    Representative,
+}
+
+/// When a shadow sample's target is drawn: the jittered point of [`ShadowTarget::Centroid`],
+/// or the VPL of [`ShadowTarget::Representative`] (docs/design.md, "When targets are drawn").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum JitterAt {
+    /// Every candidate, before selection: its weight f_j is its contribution at its target
+    /// (the authors' demo code).
+    Candidate,
+    /// The k selected samples, when their rays are traced: candidates are offered with the
+    /// contribution already computed (the paper's text: f_i "based on the illumination
+    /// contribution of each light"); the default.
+    Ray,
+}
+
+impl Default for LghSettings {
+    fn default() -> Self {
+        Self {
+            alpha: 1.0,
+            levels: LevelCount::Auto,
+            shadow_from_level: 2,
+            start_level: 1,
+            dev_scale: 0.5,
+            construction: Construction::Restrict,
+            normal_bins: false,
+            emission: GridEmission::EnergyConserving,
+            jitter: JitterAt::Ray,
+            shadow_target: ShadowTarget::Representative,
+        }
+    }
+}
+
+/// The default tile edge, in sub-image pixels, for n x n interleaving: 16 full-resolution
+/// pixels (16 / n sub-image pixels, at least 4). A sub-image tile of 16 sub-image pixels
+/// spans 16 n pixels of the screen, so at n = 4 its lights would cover far more than a
+/// pixel's (docs/design.md, "Tiles under interleaving").
+#[must_use]
+pub fn auto_tile(n: u32) -> u32 {
+    (16 / n.max(1)).max(4)
+}

@@ -1,0 +1,149 @@
+//! The LGH lighting loop (Lin & Yuksel 2019 section 3.2 and Appendix A): per pixel, the
+//! unshadowed sum A over its tile's lights and the k reservoirs of shadow candidates.
+
+use glam::Vec3;
+use lgh_core::blending::blend;
+use lgh_core::color::luminance;
+use lgh_core::lighting_grid::representative::SLOTS;
+use lgh_core::reservoir::Reservoir;
+use lgh_core::rng::Rng;
+use lgh_core::sampling::raised_cosine;
+use lgh_core::vpl::light_irradiance;
+
+use crate::methods::lgh::light_batch::{LANES, LightBatch, PackedLight};
+use crate::methods::lgh::lights::ShadeLights;
+use crate::methods::lgh::settings::{JitterAt, LghSettings};
+use crate::passes::gbuffer::GBuffer;
+use crate::shading::reservoirs::{ReservoirLayout, ShadowSample, halves, offer};
+use crate::shading::tiles::InterleavedBins;
+
+/// Random-stream tag of the LGH lighting pass.
+const STREAM_LGH: u64 = 0x161;
+
+/// What the lighting loop of one row reads.
+pub(super) struct RowContext<'a> {
+    pub(super) g: &'a GBuffer,
+    pub(super) bins: &'a InterleavedBins,
+    pub(super) packed: &'a [PackedLight],
+    pub(super) lights: &'a ShadeLights,
+    pub(super) settings: &'a LghSettings,
+    pub(super) layout: ReservoirLayout,
+    pub(super) k: usize,
+    pub(super) representative: bool,
+    pub(super) eps2: f32,
+    pub(super) seed: u64,
+    /// Interleaving n: pixels of a row cycle through n sub-images.
+    pub(super) phases: usize,
+}
+
+/// The lighting loop over row `y` (LGH 2019 section 3.2 and Appendix A): per pixel, the sum
+/// A of B_l(d) f_j over its tile's lights, the overdraw, and the k reservoirs of shadow
+/// candidates.
+pub(super) fn shade_row(
+    ctx: &RowContext,
+    y: usize,
+    row: &mut [(Vec3, u32)],
+    row_res: &mut [Reservoir<ShadowSample>],
+    batches: &mut [LightBatch],
+) {
+    let RowContext {
+        g,
+        bins,
+        packed,
+        lights,
+        settings,
+        layout,
+        k,
+        representative,
+        eps2,
+        seed,
+        ..
+    } = *ctx;
+    let w = g.width as usize;
+    let keys = bins.row_keys(y as u32, w as u32);
+    for ((x, px), (phase, key)) in row.iter_mut().enumerate().zip(keys) {
+        let i = y * w + x;
+        if !g.is_hit(i) {
+            continue;
+        }
+        let (xp, n) = (g.position[i], g.normal[i]);
+        let mut rng = Rng::new(&[seed, i as u64, STREAM_LGH]);
+        let (a, overdraw) = px;
+        let res = layout.pixel_mut(row_res, x);
+        // The batch of this pixel's tile (one per sub-image column phase).
+        let batch = &mut batches[phase];
+        if batch.key != Some(key) {
+            batch.fill(key, packed, bins.lights_at(x as u32, y as u32));
+        }
+        let batch = &*batch;
+        for chunk in 0..batch.chunks() {
+            let lanes = batch.eval(chunk, xp, n, eps2);
+            for lane in 0..LANES {
+                if !lanes.reached[lane] {
+                    continue;
+                }
+                *overdraw += 1;
+                let bc = Vec3::new(
+                    lanes.value[0][lane],
+                    lanes.value[1][lane],
+                    lanes.value[2][lane],
+                );
+                if bc == Vec3::ZERO {
+                    continue;
+                }
+                let e = chunk * LANES + lane;
+                let (j, l) = (batch.index[e] as usize, batch.level[e]);
+                *a += bc;
+                if k > 0 && l as u32 >= settings.shadow_from_level {
+                    let pl = &packed[j];
+                    let (p, nj, iso, ij) = (pl.position, pl.normal, pl.iso, pl.intensity);
+                    let b = || blend(pl.role, (p - xp).length(), pl.radius);
+                    let sample = match (settings.jitter, representative) {
+                        // The target is drawn after selection.
+                        (JitterAt::Ray, _) => ShadowSample {
+                            q: p,
+                            n: nj,
+                            f: bc,
+                            jitter: if representative {
+                                Vec3::ZERO
+                            } else {
+                                lights.deviation[j] * settings.dev_scale
+                            },
+                            light: j as u32,
+                        },
+                        (JitterAt::Candidate, true) => {
+                            let s = rng.next_u32() as usize % SLOTS;
+                            let Some((q, nq)) = lights.representative(j, s) else {
+                                continue;
+                            };
+                            ShadowSample {
+                                q,
+                                n: nq,
+                                f: b() * light_irradiance(xp, n, q, nq, 0.0, ij, eps2),
+                                jitter: Vec3::ZERO,
+                                light: j as u32,
+                            }
+                        }
+                        (JitterAt::Candidate, false) => {
+                            let t = Vec3::new(
+                                raised_cosine(halves(rng.next_u32())),
+                                raised_cosine(halves(rng.next_u32())),
+                                raised_cosine(halves(rng.next_u32())),
+                            );
+                            let dev = lights.deviation[j] * settings.dev_scale;
+                            let q = p + t * dev;
+                            ShadowSample {
+                                q,
+                                n: nj,
+                                f: b() * light_irradiance(xp, n, q, nj, iso, ij, eps2),
+                                jitter: Vec3::ZERO,
+                                light: j as u32,
+                            }
+                        }
+                    };
+                    offer(res, sample, luminance(sample.f), &mut rng);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,40 @@
+//! The passes every frame runs before its method: the G-buffer ([`gbuffer`]), the direct
+//! light ([`direct`]) and the VPLs by light tracing ([`vpl_gen`]), with the helpers of
+//! per-pixel passes.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::progress::Progress;
+
+pub mod direct;
+pub mod gbuffer;
+pub mod vpl_gen;
+
+/// `n` copies of `value`, written in parallel. `vec![value; n]` writes them on one thread,
+/// and for an image-sized buffer that thread also takes every page fault of the fresh
+/// memory (measured: about 1.5 ms per 11 MB buffer here, 10 ms of the G-buffer's 55).
+#[must_use]
+pub fn par_filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
+    (0..n).into_par_iter().map(|_| value).collect()
+}
+
+/// Runs `f` for every pixel index of a `width` x `len / width` image, rows in parallel, and
+/// reports one unit of progress per row. Each pixel's value depends only on its index, so the
+/// result is the same whatever the thread count.
+pub fn per_pixel<F>(len: usize, width: usize, progress: &dyn Progress, f: F) -> Vec<Vec3>
+where
+    F: Fn(usize) -> Vec3 + Sync,
+{
+    let mut out = par_filled(len, Vec3::ZERO);
+    out.par_chunks_mut(width.max(1))
+        .enumerate()
+        .for_each(|(y, row)| {
+            let base = y * width;
+            for (x, v) in row.iter_mut().enumerate() {
+                *v = f(base + x);
+            }
+            progress.advance(1);
+        });
+    out
+}

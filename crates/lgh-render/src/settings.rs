@@ -1,0 +1,363 @@
+//! Everything that defines a frame besides the scene: one settings model for the library and
+//! the command line.
+//!
+//! [`RenderSettings`] holds the settings every frame has, the settings shared by several
+//! methods once ([`ShadowSettings`], [`Tiling`]), and one struct per method folder
+//! ([`LghSettings`], [`SlcSettings`], [`PtSettings`]). With the `clap` feature every struct is
+//! a `clap::Args` and every enum a `clap::ValueEnum`: the field docs are the `--help` text
+//! and the defaults come from the `Default` impls, so the command line mirrors nothing by
+//! hand. [`RenderSettings::validate`] checks the values a type cannot.
+
+use lgh_core::lighting_grid::{GridError, LevelCount};
+
+use crate::methods::lgh::LghSettings;
+use crate::methods::pt::PtSettings;
+use crate::methods::slc::SlcSettings;
+use crate::methods::{Method, lgh};
+use crate::passes::vpl_gen::PathNumbers;
+use crate::shading::interleave::BlurParams;
+use crate::shading::ratio::MAX_SHADOW_SAMPLES;
+
+/// Which part of the radiance the output image holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum Component {
+    /// Emission + direct + indirect light.
+    All,
+    /// Emission + direct light from the primary lights only.
+    Direct,
+    /// Indirect light (the VPLs) only, to compare methods on what differs between them.
+    Indirect,
+}
+
+/// Filters of the shadow estimates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum ShadowFilter {
+    /// Edge-avoiding a-trous wavelet filter (Dammertz et al. 2010).
+    Atrous,
+    /// No filter.
+    None,
+}
+
+/// Ray-traced shadows through the ratio estimator, shared by the methods that use it (`lgh`,
+/// `slc`).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+pub struct ShadowSettings {
+    /// lgh, slc: shadow samples (shadow rays) per pixel, 0 = no shadows (at most 16).
+    #[cfg_attr(feature = "clap", arg(long = "shadow-samples", default_value_t = ShadowSettings::default().samples))]
+    pub samples: u32,
+    /// lgh, slc: filter applied to the shadow estimates.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = ShadowSettings::default().filter))]
+    pub filter: ShadowFilter,
+    /// lgh, slc: a-trous passes.
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = ShadowSettings::default().filter_passes))]
+    pub filter_passes: u32,
+}
+
+impl Default for ShadowSettings {
+    fn default() -> Self {
+        Self {
+            samples: 4,
+            filter: ShadowFilter::Atrous,
+            filter_passes: 5,
+        }
+    }
+}
+
+impl ShadowSettings {
+    /// Shadow samples k per pixel for a method that is `shadowed` (0 if not), at most
+    /// [`MAX_SHADOW_SAMPLES`].
+    #[must_use]
+    pub fn k(&self, shadowed: bool) -> usize {
+        if shadowed {
+            self.samples.min(MAX_SHADOW_SAMPLES) as usize
+        } else {
+            0
+        }
+    }
+
+    /// A-trous passes, 0 without the filter.
+    #[must_use]
+    pub fn passes(&self) -> u32 {
+        match self.filter {
+            ShadowFilter::Atrous => self.filter_passes,
+            ShadowFilter::None => 0,
+        }
+    }
+}
+
+/// Interleaved sampling and light binning, shared by the tiled methods (`lgh`, `slc`); each
+/// has its own defaults.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+pub struct Tiling {
+    /// lgh, slc: n x n interleaved sampling: each of the n^2 sub-images shades 1/n^2 of the
+    /// lights (of each level, for lgh), then a discontinuity-aware blur recombines them.
+    /// Default: 1 (none) for lgh, 8 for slc (the papers' settings).
+    #[cfg_attr(feature = "clap", arg(long))]
+    pub interleave: Option<u32>,
+    /// lgh, slc: screen tile edge in sub-image pixels for light binning. Default: 16 full-
+    /// resolution pixels for lgh (16 / n sub-image pixels with n x n interleaving, at least
+    /// 4), 16 sub-image pixels for slc.
+    #[cfg_attr(feature = "clap", arg(long))]
+    pub tile: Option<u32>,
+    /// The discontinuity-aware blur that recombines interleaved sub-images.
+    #[cfg_attr(feature = "clap", arg(skip = BlurParams::defaults()))]
+    #[serde(skip)]
+    pub blur: BlurParams,
+}
+
+impl Default for Tiling {
+    fn default() -> Self {
+        Self {
+            interleave: None,
+            tile: None,
+            blur: BlurParams::defaults(),
+        }
+    }
+}
+
+/// Everything that defines a frame besides the scene.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+pub struct RenderSettings {
+    /// Image width in pixels.
+    #[cfg_attr(feature = "clap", arg(skip = RenderSettings::default().width))]
+    pub width: u32,
+    /// Image height in pixels.
+    #[cfg_attr(feature = "clap", arg(skip = RenderSettings::default().height))]
+    pub height: u32,
+    /// How the indirect light is computed (`brute` is the exact reference, slow).
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = RenderSettings::default().method))]
+    pub method: Method,
+    /// Number of virtual point lights (VPLs) to generate by light tracing.
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().vpls))]
+    pub vpls: usize,
+    /// Maximum VPLs per light path, i.e. indirect bounces represented (1 = one bounce).
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().bounces))]
+    pub bounces: u32,
+    /// Numbers that drive the light paths (both unbiased; `sobol` is stratified).
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = RenderSettings::default().path_numbers))]
+    pub path_numbers: PathNumbers,
+    /// Seed of all random choices; the same seed gives the same image on any thread count.
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().seed))]
+    pub seed: u64,
+    /// Which part of the radiance to write.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = RenderSettings::default().component))]
+    pub component: Component,
+    /// Shadow-ray samples per pixel for area lights (emissive triangles) in the direct pass.
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().area_samples))]
+    pub area_samples: u32,
+    /// Camera exposure E: the multiplier of PNG output, and the E of the error bounds of the
+    /// light ranges (slc, pt-*). Default: the scene file's, else 1.
+    #[cfg_attr(feature = "clap", arg(long))]
+    pub exposure: Option<f32>,
+    /// slc, pt-*: error bound epsilon_max of the light ranges (smaller = longer ranges, less
+    /// noise, slower). Default: the paper's 0.0005 for slc, 0.125 for the path tracer.
+    #[cfg_attr(feature = "clap", arg(long))]
+    pub error_bound: Option<f32>,
+    /// eps of the 1/(d^2 + eps^2) clamp, as a fraction of the scene's bounding-sphere radius
+    /// (0.01, as the LGH authors' code; docs/design.md, "Clamps").
+    #[cfg_attr(feature = "clap", arg(skip = RenderSettings::default().clamp_fraction))]
+    pub clamp_fraction: f32,
+    /// Ray-traced shadows of the methods that use the ratio estimator.
+    #[cfg_attr(feature = "clap", command(flatten))]
+    pub shadows: ShadowSettings,
+    /// Interleaving and light binning of the tiled methods.
+    #[cfg_attr(feature = "clap", command(flatten))]
+    pub tiling: Tiling,
+    /// Settings of the `lgh` methods.
+    #[cfg_attr(feature = "clap", command(flatten))]
+    pub lgh: LghSettings,
+    /// Settings of the `slc` methods.
+    #[cfg_attr(feature = "clap", command(flatten))]
+    pub slc: SlcSettings,
+    /// Settings of the `pt` methods.
+    #[cfg_attr(feature = "clap", command(flatten))]
+    pub pt: PtSettings,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 640,
+            height: 360,
+            method: lgh::LGH,
+            vpls: 10_000,
+            bounces: 3,
+            path_numbers: PathNumbers::Sobol,
+            seed: 0,
+            component: Component::All,
+            area_samples: 16,
+            exposure: None,
+            error_bound: None,
+            clamp_fraction: 0.01,
+            shadows: ShadowSettings::default(),
+            tiling: Tiling::default(),
+            lgh: LghSettings::default(),
+            slc: SlcSettings::default(),
+            pt: PtSettings::default(),
+        }
+    }
+}
+
+/// A setting out of its range: names the setting (as its command-line flag), the value and
+/// what is expected.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("--{name} {value}: {expected}")]
+pub struct SettingsError {
+    /// The setting, as its command-line flag without the dashes.
+    pub name: &'static str,
+    /// The value given.
+    pub value: String,
+    /// What the value must be.
+    pub expected: String,
+}
+
+/// Largest image: 2^28 pixels (16384 x 16384).
+pub const MAX_PIXELS: u64 = 1 << 28;
+
+/// The error bound of stochastic light ranges (Tokuyoshi & Harada 2016, Eqs. 6 and 7):
+/// epsilon_max and the camera exposure E it is relative to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErrorBound {
+    /// epsilon_max.
+    pub epsilon_max: f32,
+    /// Camera exposure E.
+    pub exposure: f32,
+}
+
+impl RenderSettings {
+    /// The exposure E: [`RenderSettings::exposure`], else the scene's.
+    #[must_use]
+    pub fn exposure_or(&self, scene_exposure: f32) -> f32 {
+        self.exposure.unwrap_or(scene_exposure)
+    }
+
+    /// The error bound of a method's light ranges: [`RenderSettings::error_bound`], else the
+    /// method's `default`, with [`RenderSettings::exposure_or`] the scene's exposure.
+    #[must_use]
+    pub fn error_bound_or(&self, default: f32, scene_exposure: f32) -> ErrorBound {
+        ErrorBound {
+            epsilon_max: self.error_bound.unwrap_or(default),
+            exposure: self.exposure_or(scene_exposure),
+        }
+    }
+
+    /// Checks every value a type does not restrict.
+    ///
+    /// # Errors
+    /// The first setting out of its range.
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        let err = |name: &'static str, value: &dyn std::fmt::Display, expected: &str| {
+            Err(SettingsError {
+                name,
+                value: value.to_string(),
+                expected: expected.to_string(),
+            })
+        };
+        let positive = |name: &'static str, v: f32| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                err(name, &v, "must be a positive number")
+            }
+        };
+        let in_range = |name: &'static str, v: u32, lo: u32, hi: u32| {
+            if (lo..=hi).contains(&v) {
+                Ok(())
+            } else {
+                err(name, &v, &format!("expected {lo} to {hi}"))
+            }
+        };
+        if self.width == 0 || self.height == 0 {
+            let size = format!("{}x{}", self.width, self.height);
+            return err("size", &size, "width and height must be at least 1");
+        }
+        if u64::from(self.width) * u64::from(self.height) > MAX_PIXELS {
+            let size = format!("{}x{}", self.width, self.height);
+            return err("size", &size, &format!("at most {MAX_PIXELS} pixels"));
+        }
+        if let Some(e) = self.exposure {
+            positive("exposure", e)?;
+        }
+        if let Some(e) = self.error_bound {
+            positive("error-bound", e)?;
+        }
+        positive("alpha", self.lgh.alpha)?;
+        positive("clamp-fraction", self.clamp_fraction)?;
+        in_range(
+            "shadow-samples",
+            self.shadows.samples,
+            0,
+            MAX_SHADOW_SAMPLES,
+        )?;
+        in_range("spp", self.pt.spp, 1, 1 << 20)?;
+        if let Some(n) = self.tiling.interleave {
+            in_range("interleave", n, 1, 16)?;
+        }
+        if let Some(t) = self.tiling.tile {
+            in_range("tile", t, 1, 256)?;
+        }
+        in_range("start-level", self.lgh.start_level, 0, 1)?;
+        if let LevelCount::Fixed(l) = self.lgh.levels {
+            in_range("levels", l, 1, lgh_core::lighting_grid::MAX_LEVELS)?;
+        }
+        Ok(())
+    }
+}
+
+/// A frame that could not be rendered.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// A setting is out of its range.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    /// The VPLs could not form a lighting grid hierarchy.
+    #[error("lighting grid hierarchy: {0}")]
+    Grid(#[from] GridError),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The defaults are valid, and each check names its setting.
+    #[test]
+    fn validation_names_the_setting() {
+        assert_eq!(RenderSettings::default().validate(), Ok(()));
+        let mut s = RenderSettings::default();
+        s.lgh.alpha = -1.0;
+        let e = s.validate().unwrap_err();
+        assert_eq!(e.to_string(), "--alpha -1: must be a positive number");
+        let mut s = RenderSettings::default();
+        s.shadows.samples = 17;
+        assert_eq!(s.validate().unwrap_err().name, "shadow-samples");
+        let mut s = RenderSettings::default();
+        s.tiling.interleave = Some(0);
+        assert_eq!(s.validate().unwrap_err().name, "interleave");
+        let s = RenderSettings {
+            width: 0,
+            ..RenderSettings::default()
+        };
+        assert_eq!(s.validate().unwrap_err().name, "size");
+    }
+
+    /// The shadow sample count is clamped and zero for unshadowed methods; no filter means no
+    /// passes.
+    #[test]
+    fn shadow_settings_resolve() {
+        let s = ShadowSettings {
+            samples: 40,
+            filter: ShadowFilter::None,
+            filter_passes: 5,
+        };
+        assert_eq!(s.k(true), MAX_SHADOW_SAMPLES as usize);
+        assert_eq!(s.k(false), 0);
+        assert_eq!(s.passes(), 0);
+    }
+}

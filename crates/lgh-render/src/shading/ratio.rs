@@ -1,0 +1,156 @@
+//! The ratio estimator (Heitz, Hill & McGuire 2018), as LGH 2019 section 3.3 uses it: the
+//! shadow estimates S and U of [`crate::shading::shadow_pass`] are recombined if interleaved,
+//! filtered by the same edge-avoiding a-trous filter, and
+//! indirect = albedo / pi x A x D(S) / D(U) per channel, A being the analytic unshadowed sum
+//! (ratio 1 where D(U) is zero).
+
+use std::f32::consts::FRAC_1_PI;
+
+use glam::Vec3;
+use lgh_core::timing::Timings;
+use rayon::prelude::*;
+
+use crate::denoise::atrous::{AtrousBuffers, AtrousParams, filter_ratio_pair_in_place};
+use crate::passes::gbuffer::GBuffer;
+use crate::shading::interleave::{self, BlurParams};
+use crate::shading::shadow_pass::ShadowEstimates;
+use crate::world::World;
+
+pub use crate::shading::reservoirs::MAX_SHADOW_SAMPLES;
+
+/// How the shadow estimates are recombined and filtered.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RatioFilter {
+    /// A-trous passes, 0 = no filter.
+    pub passes: u32,
+    /// Discontinuity-aware blur of A, S and U before the a-trous filter (interleaved
+    /// sampling).
+    pub interleave_blur: Option<BlurParams>,
+}
+
+/// What the shadow passes produce.
+#[derive(Clone, Debug, Default)]
+pub struct Shadowed {
+    /// Indirect radiance albedo / pi x A x ratio.
+    pub indirect: Vec<Vec3>,
+    /// The unshadowed sum A, recombined if interleaved.
+    pub unshadowed: Vec<Vec3>,
+    /// The shadow ratio, filtered and raw.
+    pub ratio: ShadowRatio,
+    /// Shadow rays traced.
+    pub rays: u64,
+}
+
+/// The shadow ratio per pixel and channel (1 where nothing is shadowed or sampled).
+#[derive(Clone, Debug, Default)]
+pub struct ShadowRatio {
+    /// D(S) / D(U): the ratio of the filtered estimates, used for compositing.
+    pub filtered: Vec<Vec3>,
+    /// S / U before filtering: noisy, it shows how far the ratio may plausibly lie from the
+    /// filtered one (the temporal filter clamps its history to its neighbourhood).
+    pub raw: Vec<Vec3>,
+}
+
+impl ShadowRatio {
+    /// Ratio 1 everywhere (no shadows).
+    #[must_use]
+    pub fn unshadowed(n: usize) -> Self {
+        let ones = vec![Vec3::ONE; n];
+        Self {
+            filtered: ones.clone(),
+            raw: ones,
+        }
+    }
+}
+
+/// S / U per channel, clamped to [0, 1]; 1 where U is zero.
+fn ratio_of(s: &[Vec3], u: &[Vec3]) -> Vec<Vec3> {
+    s.par_iter()
+        .zip(u)
+        .map(|(&s, &u)| {
+            Vec3::select(
+                u.cmpgt(Vec3::splat(1e-20)),
+                (s / u).clamp(Vec3::ZERO, Vec3::ONE),
+                Vec3::ONE,
+            )
+        })
+        .collect()
+}
+
+/// indirect = albedo / pi x A x ratio per pixel.
+#[must_use]
+pub fn composite(g: &GBuffer, a: &[Vec3], ratio: &[Vec3]) -> Vec<Vec3> {
+    (0..g.len())
+        .map(|i| g.albedo[i] * FRAC_1_PI * a[i] * ratio[i])
+        .collect()
+}
+
+/// Recombines the unshadowed sum `a` and the shadow estimates if interleaved (timing
+/// `interleave_blur`), filters the shadow estimates and composites: the indirect radiance
+/// albedo / pi x A x D(S) / D(U), A, the ratio (filtered and raw) and the number of rays.
+/// Timings `shadow_filter` and `composite` go to `t` too. The filter works in `buffers`.
+#[must_use]
+pub fn shadowed_indirect(
+    world: &World,
+    g: &GBuffer,
+    a: Vec<Vec3>,
+    estimates: ShadowEstimates,
+    settings: &RatioFilter,
+    t: &mut Timings,
+    buffers: &mut AtrousBuffers,
+) -> Shadowed {
+    let n_px = g.len();
+    if estimates.k == 0 {
+        let a = match &settings.interleave_blur {
+            Some(p) => t.time("interleave_blur", || interleave::recombine(a, g, p)),
+            None => a,
+        };
+        let ratio = ShadowRatio::unshadowed(n_px);
+        let indirect = t.time("composite", || composite(g, &a, &ratio.filtered));
+        return Shadowed {
+            indirect,
+            unshadowed: a,
+            ratio,
+            rays: 0,
+        };
+    }
+    let ShadowEstimates {
+        s: s_hat,
+        u: u_hat,
+        rays,
+        ..
+    } = estimates;
+    // A, S and U recombined together: one discontinuity map, one walk per pixel.
+    let [a, s_hat, u_hat] = match &settings.interleave_blur {
+        Some(p) => t.time("interleave_blur", || {
+            interleave::recombine_n([a, s_hat, u_hat], g, p)
+        }),
+        None => [a, s_hat, u_hat],
+    };
+    let mut raw = Vec::new();
+    let (s_f, u_f) = t.time("shadow_filter", || {
+        raw = ratio_of(&s_hat, &u_hat);
+        if settings.passes > 0 {
+            let params = AtrousParams {
+                passes: settings.passes,
+                ..AtrousParams::lgh_defaults(world.radius)
+            };
+            let (mut s, mut u) = (s_hat, u_hat);
+            filter_ratio_pair_in_place(&mut s, &mut u, g, &params, buffers);
+            (s, u)
+        } else {
+            (s_hat, u_hat)
+        }
+    });
+    let ratio = ShadowRatio {
+        filtered: ratio_of(&s_f, &u_f),
+        raw,
+    };
+    let indirect = t.time("composite", || composite(g, &a, &ratio.filtered));
+    Shadowed {
+        indirect,
+        unshadowed: a,
+        ratio,
+        rays,
+    }
+}

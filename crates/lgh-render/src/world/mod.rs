@@ -1,0 +1,171 @@
+//! A scene prepared for rendering: the scene, its BVH and the per-triangle data the passes
+//! read in their inner loops.
+
+use glam::{Vec2, Vec3};
+use lgh_scene::Scene;
+
+pub mod accel;
+pub mod lights;
+
+use accel::Accel;
+use lights::LightSet;
+
+/// Everything a frame needs that does not depend on the camera or the settings.
+#[derive(Debug)]
+pub struct World {
+    /// The scene.
+    pub scene: Scene,
+    /// The BVH over the scene's triangles.
+    pub accel: Accel,
+    /// Unit face normal of every triangle (counter-clockwise front).
+    pub face_normals: Vec<Vec3>,
+    /// All primary lights, with their sampling distributions.
+    pub lights: LightSet,
+    /// Centre of the scene's bounding sphere.
+    pub centre: Vec3,
+    /// Radius of the scene's bounding sphere.
+    pub radius: f32,
+    /// Offset of ray origins from surfaces, along the geometric normal (1e-4 x radius).
+    pub ray_epsilon: f32,
+    /// The scene's camera and lights as loaded, which the animation moves.
+    rest: (Option<lgh_scene::Camera>, Vec<lgh_scene::Light>),
+    /// The mesh as loaded, kept only if the animation moves objects.
+    rest_mesh: Option<lgh_scene::Mesh>,
+}
+
+/// The unit face normal of every triangle of `mesh`.
+fn face_normals(mesh: &lgh_scene::Mesh) -> Vec<Vec3> {
+    (0..mesh.len())
+        .map(|t| mesh.face_cross(t).normalize_or_zero())
+        .collect()
+}
+
+/// The surface seen along a ray, with everything shading needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    /// World position.
+    pub position: Vec3,
+    /// Unit geometric normal, on the side the ray came from.
+    pub geo_normal: Vec3,
+    /// Unit shading normal (interpolated vertex normals), in the same hemisphere as
+    /// `geo_normal`.
+    pub normal: Vec3,
+    /// Diffuse albedo (factor x texture).
+    pub albedo: Vec3,
+    /// Emitted radiance towards the ray's origin (zero when the back of an emitter is seen).
+    pub emission: Vec3,
+    /// The triangle hit.
+    pub triangle: u32,
+}
+
+impl World {
+    /// Prepares `scene` (which must have passed [`Scene::finish`]): builds the BVH and the light
+    /// tables.
+    #[must_use]
+    pub fn new(scene: Scene) -> Self {
+        let accel = Accel::build(&scene.mesh);
+        let face_normals = face_normals(&scene.mesh);
+        let rest_mesh = (!scene.animation.objects.is_empty()).then(|| scene.mesh.clone());
+        let (centre, radius) = scene.bounding_sphere();
+        let lights = LightSet::new(&scene, radius);
+        let rest = (scene.camera.clone(), scene.lights.clone());
+        Self {
+            rest,
+            rest_mesh,
+            scene,
+            accel,
+            face_normals,
+            lights,
+            centre,
+            radius,
+            ray_epsilon: 1e-4 * radius,
+        }
+    }
+
+    /// Moves the camera, the lights and the animated objects to time `t` (seconds) of the
+    /// scene's animation and rebuilds the light tables. If objects move, the BVH is rebuilt
+    /// (in parallel; a full rebuild keeps its quality, where a refit would degrade as objects
+    /// travel). The bounding sphere and the ray offset stay those of the loaded scene.
+    pub fn set_time(&mut self, t: f32) {
+        if self.scene.animation.is_empty() {
+            return;
+        }
+        let anim = &self.scene.animation;
+        self.scene.camera = self.rest.0.as_ref().map(|c| anim.camera_at(c, t));
+        self.scene.lights = anim.lights_at(&self.rest.1, t);
+        if let Some(rest) = &self.rest_mesh
+            && anim.pose_mesh(rest, t, &mut self.scene.mesh)
+        {
+            self.accel = Accel::build(&self.scene.mesh);
+            self.face_normals = face_normals(&self.scene.mesh);
+        }
+        self.lights = LightSet::new(&self.scene, self.radius);
+    }
+
+    /// The surface at `hit` seen along the unit direction `dir`.
+    #[must_use]
+    pub fn surface(&self, hit: &crate::world::accel::Hit, origin: Vec3, dir: Vec3) -> SurfacePoint {
+        let t = hit.triangle as usize;
+        let mesh = &self.scene.mesh;
+        let [i0, i1, i2] = mesh.triangles[t].map(|i| i as usize);
+        let (b1, b2) = (hit.bary.x, hit.bary.y);
+        let b0 = 1.0 - b1 - b2;
+        let face = self.face_normals[t];
+        let front = face.dot(dir) < 0.0;
+        let geo_normal = if front { face } else { -face };
+        let (n0, n1, n2) = (mesh.normals[i0], mesh.normals[i1], mesh.normals[i2]);
+        let mut normal = if n0 != Vec3::ZERO && n1 != Vec3::ZERO && n2 != Vec3::ZERO {
+            (n0 * b0 + n1 * b1 + n2 * b2).normalize_or_zero()
+        } else {
+            Vec3::ZERO
+        };
+        if normal == Vec3::ZERO {
+            normal = geo_normal;
+        } else if normal.dot(geo_normal) < 0.0 {
+            normal = -normal;
+        }
+        let uv: Vec2 = mesh.uvs[i0] * b0 + mesh.uvs[i1] * b1 + mesh.uvs[i2] * b2;
+        let material = self.scene.material_of(t);
+        SurfacePoint {
+            position: origin + dir * hit.t,
+            geo_normal,
+            normal,
+            albedo: material.albedo_at(&self.scene.textures, uv),
+            emission: if front { material.emission } else { Vec3::ZERO },
+            triangle: hit.triangle,
+        }
+    }
+
+    /// Traces a ray from `origin` and returns the surface it sees.
+    #[must_use]
+    pub fn trace(&self, origin: Vec3, dir: Vec3) -> Option<SurfacePoint> {
+        self.accel
+            .intersect(origin, dir, f32::INFINITY)
+            .map(|h| self.surface(&h, origin, dir))
+    }
+
+    /// A ray origin just off the surface at `p` (geometric normal `n_geo`), on the side that
+    /// `towards` points to.
+    #[inline]
+    #[must_use]
+    pub fn offset(&self, p: Vec3, n_geo: Vec3, towards: Vec3) -> Vec3 {
+        let s = if n_geo.dot(towards) >= 0.0 { 1.0 } else { -1.0 };
+        p + n_geo * (s * self.ray_epsilon)
+    }
+
+    /// True if something blocks the segment between surface points `a` (geometric normal
+    /// `na`) and `b` (geometric normal `nb`). Both ends are moved off their surfaces first, so
+    /// that neither surface shadows itself.
+    #[inline]
+    #[must_use]
+    pub fn occluded_between(&self, a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> bool {
+        let o = self.offset(a, na, b - a);
+        let e = self.offset(b, nb, a - b);
+        let d = e - o;
+        let len = d.length();
+        if len <= self.ray_epsilon {
+            return false;
+        }
+        self.accel.occluded(o, d / len, len * (1.0 - 1e-4))
+    }
+}

@@ -1,0 +1,15 @@
+//! The integration tests of lgh-render, in one binary (one link instead of one per file).
+
+mod accel;
+mod analytic;
+mod common;
+mod convergence;
+mod determinism;
+mod formats;
+mod ism;
+mod lgh_method;
+mod pt_method;
+mod sequence;
+mod shared_scenes;
+mod slc_method;
+mod vpl_energy;
