@@ -8,7 +8,7 @@
 //!    tile's lights j, B_l(d_j) x Phi_j e_j(w) max(0, n_x . w) / (pi (d^2 + eps^2))
 //!    (the unshadowed sum A), skipping lights whose blending weight is zero. The emission
 //!    cosine e_j is max(0, -m_j . w) + (1 - |m_j|) / 4 for the mean normal m_j by default
-//!    ([`GridEmission`]; max(0, -m_j . w) alone is the demo's, which loses light where normals
+//!    ([`lgh_core::vpl::GridEmission`]; max(0, -m_j . w) alone is the demo's, which loses light where normals
 //!    disagree). The number of lights whose sphere covers the pixel is its overdraw (Fig. 5).
 //!    With n x n interleaved sampling (4.3, `interleave` > 1), the lights of each level are
 //!    dealt to the n^2 sub-images (light k to k mod n^2), each pixel sums only its
