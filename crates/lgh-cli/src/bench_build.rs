@@ -29,8 +29,8 @@ pub struct BuildArgs {
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Number of levels: `auto` (largest l_max with |S1| < N/2) or a number 1..=10.
-    #[arg(long, default_value = "auto")]
-    pub levels: String,
+    #[arg(long, default_value_t = LevelCount::Auto)]
+    pub levels: LevelCount,
     /// Timed runs per configuration, after one untimed warm-up build; the report gives
     /// medians.
     #[arg(long, default_value_t = 7)]
@@ -41,6 +41,10 @@ pub struct BuildArgs {
     /// Print one JSON object {runs: [...]} instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// Print the totals as a Markdown table (rows: lights; columns: variants), the form of
+    /// docs/performance.md.
+    #[arg(long)]
+    pub markdown: bool,
 }
 
 struct Input {
@@ -67,13 +71,7 @@ fn rss(key: &str) -> Option<u64> {
 
 pub fn run(args: &BuildArgs) -> Result<()> {
     let threads = crate::set_threads(args.threads)?;
-    let levels = match args.levels.as_str() {
-        "auto" => LevelCount::Auto,
-        s => match s.parse::<u32>() {
-            Ok(l) if (1..=10).contains(&l) => LevelCount::Fixed(l),
-            _ => bail!("--levels {s}: expected 'auto' or a number from 1 to 10"),
-        },
-    };
+    let levels = args.levels;
     if args.lights.is_empty() || args.lights.contains(&0) {
         bail!("--lights: give one or more positive counts");
     }
@@ -157,6 +155,10 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         );
         return Ok(());
     }
+    if args.markdown {
+        print_markdown(&rows, &args.lights, threads);
+        return Ok(());
+    }
     println!(
         "Lighting grid hierarchy construction, median of {} runs, {threads} threads{}",
         args.runs.max(1),
@@ -191,4 +193,25 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The total build times of `rows` as a Markdown table: one row per light count, one column
+/// per construction.
+fn print_markdown(rows: &[serde_json::Value], lights: &[usize], threads: usize) {
+    let variants = ["restrict", "gather", "scatter"];
+    println!("Hierarchy build, median ms, {threads} threads (`lgh bench build --markdown`):\n");
+    println!("| lights | {} |", variants.join(" | "));
+    println!("| --- |{}", " --- |".repeat(variants.len()));
+    for &n in lights {
+        let cells: Vec<String> = variants
+            .iter()
+            .map(|v| {
+                rows.iter()
+                    .find(|r| r["variant"] == *v && r["lights"].as_u64() == Some(n as u64))
+                    .and_then(|r| r["total_ms"].as_f64())
+                    .map_or("-".into(), |ms| format!("{ms:.2}"))
+            })
+            .collect();
+        println!("| {n} | {} |", cells.join(" | "));
+    }
 }

@@ -48,6 +48,9 @@ pub struct RenderBenchArgs {
     /// Print one JSON object {rows: [...]} instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// Print Table 3 as a Markdown table, the form of docs/performance.md.
+    #[arg(long)]
+    pub markdown: bool,
 }
 
 pub fn run(args: &RenderBenchArgs) -> Result<()> {
@@ -163,6 +166,12 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
         );
         return Ok(());
     }
+    let mut interleaves = vec![1];
+    interleaves.extend(args.interleave.iter().filter(|&&n| n != 1));
+    if args.markdown {
+        print_markdown(&rows, &interleaves, gbuffer_ms);
+        return Ok(());
+    }
     println!(
         "LGH render times on {name}, {w}x{h}, alpha {}, {threads} threads (ms)",
         args.lgh.alpha
@@ -201,8 +210,6 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
         "composite",
         "overdraw"
     );
-    let mut interleaves = vec![1];
-    interleaves.extend(args.interleave.iter().filter(|&&n| n != 1));
     for r in &rows {
         for &n in &interleaves {
             let k = &r["runs"][run_key(4, n)];
@@ -233,5 +240,36 @@ fn run_key(k: u32, n: u32) -> String {
         format!("shadow_samples_{k}")
     } else {
         format!("shadow_samples_{k}_interleave_{n}")
+    }
+}
+
+/// The passes of the k = 4 runs as a Markdown table, one row per VPL count and interleaving.
+fn print_markdown(rows: &[serde_json::Value], interleaves: &[u32], gbuffer_ms: f64) {
+    let passes = [
+        ("representatives_ms", "reps"),
+        ("lighting_ms", "lighting"),
+        ("shadow_targets_ms", "targets"),
+        ("shadow_rays_ms", "rays"),
+        ("interleave_blur_ms", "blur"),
+        ("shadow_filter_ms", "a-trous"),
+        ("composite_ms", "composite"),
+        ("render_ms", "frame after build"),
+    ];
+    let names: Vec<&str> = passes.iter().map(|p| p.1).collect();
+    println!("| VPLs | il | G-buffer | {} |", names.join(" | "));
+    println!("| --- | --- | --- |{}", " --- |".repeat(passes.len()));
+    for r in rows {
+        for &n in interleaves {
+            let k = &r["runs"][run_key(4, n)];
+            let cells: Vec<String> = passes
+                .iter()
+                .map(|(key, _)| format!("{:.1}", k[*key].as_f64().unwrap_or(0.0)))
+                .collect();
+            println!(
+                "| {} | {n} | {gbuffer_ms:.1} | {} |",
+                r["vpls"],
+                cells.join(" | ")
+            );
+        }
     }
 }

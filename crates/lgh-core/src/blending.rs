@@ -3,7 +3,7 @@
 //!
 //! The light of level l with radius r_l = alpha h_l is weighted by B_l(d), where d is the
 //! distance from the shading point to that light's own position. The functions are piecewise
-//! linear (both reference codes agree; LGH design notes section 4.2), with R = r_l:
+//! linear (both reference codes agree; docs/design.md, "Blending functions"), with R = r_l:
 //!
 //! | level | d <= R/2 | R/2 < d <= R | R < d < 2R | d >= 2R |
 //! | --- | --- | --- | --- | --- |

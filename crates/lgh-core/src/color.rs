@@ -5,7 +5,7 @@ use glam::Vec3;
 /// Luminance weights used everywhere in lgh (ITU-R BT.601: 0.299, 0.587, 0.114).
 ///
 /// These are the weights the LGH authors' code uses for the shadow-sample selection weight f_i
-/// (design notes, section 5); using one set of weights for selection, statistics and the `diff`
+/// (docs/design.md, "Shadow sampling"); using one set of weights for selection, statistics and the `diff`
 /// metrics keeps the numbers comparable.
 pub const LUMINANCE_WEIGHTS: Vec3 = Vec3::new(0.299, 0.587, 0.114);
 

@@ -10,8 +10,8 @@
 //! point lights, Eq. 7 for area lights). The clamped baseline (Appendix A) uses a fixed range
 //! from the same error bound and drops the light beyond it, which biases the image darker.
 //!
-//! The fall-off here is f(l) = 1 / (l^2 + eps^2), the renderer's clamped inverse square (LGH
-//! design notes 4.3); eps = 0 gives the paper's 1 / l^2. With eps > 0 a range can be 0: the
+//! The fall-off here is f(l) = 1 / (l^2 + eps^2), the renderer's clamped inverse square (docs/design.md,
+//! "Clamps"); eps = 0 gives the paper's 1 / l^2. With eps > 0 a range can be 0: the
 //! light is then culled everywhere, which Eq. 1 allows (p_i(0) = f(0) / alpha_i < xi_i).
 
 use std::f32::consts::PI;

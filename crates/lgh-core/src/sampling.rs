@@ -84,8 +84,8 @@ pub fn uniform_triangle(u: Vec2) -> Vec2 {
 /// A sample t in [-1, 1] of the raised-cosine density (1 + cos(pi t)) / 2, by rejection-free
 /// folding: draw (x, y) uniform; if y > (1 + cos(pi x)) / 2 use x - 1, else x.
 ///
-/// This is the per-axis jitter of a grid light's shadow-sample position (LGH design notes,
-/// section 5): the offset t * deviation roughly reproduces the spread of the lights the grid
+/// This is the per-axis jitter of a grid light's shadow-sample position (docs/design.md,
+/// "Shadow sampling"): the offset t * deviation roughly reproduces the spread of the lights the grid
 /// light stands for.
 ///
 /// cos(pi x) is evaluated as -sin(pi (x - 1/2)) by its Taylor polynomial to degree 9

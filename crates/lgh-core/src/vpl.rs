@@ -73,8 +73,8 @@ impl Vpls {
 /// BRDF: `Phi * max(0, n_v . w_v) * max(0, n_x . w_x) / (pi * (d^2 + eps^2))`, where w_x points
 /// from the receiver x to the VPL and w_v = -w_x.
 ///
-/// The `eps` clamp of 1/d^2 is the LGH design notes' choice (section 4.3, eps = 0.01 x scene
-/// radius). Returns zero when either cosine is not positive (back-facing early-out).
+/// The `eps` clamp of 1/d^2 is the authors' code's (eps = 0.01 x scene radius; docs/design.md,
+/// "Clamps"). Returns zero when either cosine is not positive (back-facing early-out).
 #[inline]
 #[must_use]
 pub fn vpl_irradiance(x: Vec3, n_x: Vec3, p: Vec3, n_v: Vec3, flux: Vec3, eps2: f32) -> Vec3 {
@@ -82,9 +82,9 @@ pub fn vpl_irradiance(x: Vec3, n_x: Vec3, p: Vec3, n_v: Vec3, flux: Vec3, eps2: 
 }
 
 /// How the emission of a grid light, which stands for many oriented VPLs, depends on the
-/// direction. The paper is silent; the design notes' choice (from the demo code) is
-/// [`GridEmission::MeanNormal`], which measured 28% too dark in a closed room, so this
-/// project's default is [`GridEmission::EnergyConserving`].
+/// direction. The paper is silent; the authors' demo code uses
+/// [`GridEmission::MeanNormal`], which loses light in a closed room, so this project's
+/// default is [`GridEmission::EnergyConserving`] (docs/design.md, "Grid-light emission").
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]

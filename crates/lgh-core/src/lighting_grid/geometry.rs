@@ -1,4 +1,4 @@
-//! Grid geometry of the hierarchy (LGH 2019 section 3.1; LGH design notes section 2).
+//! Grid geometry of the hierarchy (LGH 2019 section 3.1; docs/design.md, "Hierarchy").
 
 use glam::{UVec3, Vec3};
 

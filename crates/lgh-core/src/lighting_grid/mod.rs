@@ -11,7 +11,7 @@
 //! Vertices whose grid light has zero intensity are removed (stream compaction) and all levels
 //! are merged into one struct-of-arrays buffer with per-level offsets.
 //!
-//! Decisions where the paper is silent are those of `shared/design/lgh-method.md`: h_top =
+//! Decisions where the paper is silent (docs/design.md, "Hierarchy"): h_top =
 //! 1.1 x the longest edge, trilinear splatting at every level, piecewise-linear blending
 //! ([`crate::blending`]). One deliberate difference from the authors' demo: when a level is
 //! gathered from S_1, each S_1 light counts with its mass W_j and carries its own variance

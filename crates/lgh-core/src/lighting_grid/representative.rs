@@ -5,8 +5,7 @@
 //! A grid light stands for the input lights around its vertex. Its centroid may lie where no
 //! input light is, for example inside a box whose top and surrounding floor carry VPLs, or
 //! inside a wall lit from both sides; a shadow ray towards it then reports the whole light as
-//! occluded, and the ratio estimator darkens the image (measured: 27 % on the Cornell box,
-//! 40 % on Sponza). A representative is one input light i drawn with probability
+//! occluded, and the ratio estimator darkens the image (docs/design.md, "Shadow targets"). A representative is one input light i drawn with probability
 //! proportional to its share of the grid light, w_v(p_i) lum(I_i), where w_v is the trilinear
 //! weight of vertex v at spacing h_l; the visibility of a representative then estimates the
 //! share-weighted visibility of the lights the grid light stands for, as brute force sums it.
@@ -27,9 +26,8 @@ use crate::color::luminance;
 use crate::rng::hash;
 
 /// Independent representatives drawn per grid light. The set is fixed for a frame, so its
-/// randomness is correlated over the image: measured on Sponza (320x180, 10K VPLs), the
-/// shadowed image's bias over four seeds spans -7..-17 % with 4 slots, -6..-13 % with 8 and
-/// -5..-10 % with 16, at 80, 135 and 240 ms for 100K VPLs.
+/// randomness is correlated over the image; more slots spread it, at a cost linear in the
+/// slots (docs/design.md, "Shadow targets").
 pub const SLOTS: usize = 8;
 
 /// No representative (a slot that no input light reached).

@@ -7,13 +7,14 @@
 //! w_c = exp(-|c_p - c_q|^2 / c_phi_i) on the guide image, with c_phi halved in standard
 //! deviation (quartered) at every pass; w_n = exp(-|N_p - N_q|^2 / n_phi) on the shading
 //! normals; w_x = exp(-|X_p - X_q|^2 / p_phi) on the world positions. Defaults are the LGH
-//! demo's (design notes section 8): 5 passes, c_phi = 0.5, n_phi = 0.1, p_phi = 0.66 x scene
+//! demo's (docs/design.md, "A-trous filter"): 5 passes, c_phi = 0.5, n_phi = 0.1, p_phi = 0.66 x scene
 //! radius.
 //!
 //! [`filter_ratio_pair`] filters the two images of the ratio estimator, S and U, with one and
 //! the same set of weights (the guide is the current ratio lum(S)/lum(U)), so that
 //! D(S) <= D(U) channel by channel and the filtered ratio stays in [0, 1]. (The demo weighs S
-//! and U with separate colour weights, a quirk the design notes say not to copy.)
+//! and U with separate colour weights, a quirk not copied; docs/design.md,
+//! "Quirks of the reference code".)
 
 use std::sync::{Mutex, PoisonError};
 
@@ -143,7 +144,7 @@ impl Planes<'_> {
 /// `LANES` pixels so that the loops vectorise; only the 7 planes a pass rewrites are
 /// double-buffered. The edge-stopping weight of a pair of pixels is symmetric, so each pair's
 /// exponential is computed once and serves both pixels (`FORWARD`): 12 instead of 24 per
-/// pixel and pass. Measured at 1280x720 (2 threads): 126 -> 100 ms for the 5 passes.
+/// pixel and pass.
 #[must_use]
 pub fn filter_ratio_pair(
     s: &[Vec3],
@@ -156,7 +157,7 @@ pub fn filter_ratio_pair(
 
 /// The working memory of [`filter_ratio_pair_with`]: 21 image-sized planes (about 90 MB at
 /// 1280x720). A renderer that filters every frame keeps one, so that the planes are not
-/// paged in afresh each frame (measured: 15 ms of a 100 ms filter at 1280x720).
+/// paged in afresh each frame.
 #[derive(Debug, Default)]
 pub struct AtrousBuffers {
     fixed: Vec<f32>,

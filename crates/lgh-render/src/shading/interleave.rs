@@ -118,7 +118,8 @@ pub fn merge<T: Copy>(subs: &[Vec<T>], width: u32, height: u32, n: u32, fill: T)
     out
 }
 
-/// Parameters of the discontinuity-aware blur (design notes 9, from the LGH demo).
+/// Parameters of the discontinuity-aware blur (from the LGH demo; docs/design.md,
+/// "Interleaved sampling").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BlurParams {
     /// Taps on each side (8: a 17-tap kernel, the size Tokuyoshi & Harada use for 8 x 8).

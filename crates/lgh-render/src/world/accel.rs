@@ -1,8 +1,8 @@
 //! Ray tracing: a BVH over all triangles with closest-hit and any-hit queries.
 //!
 //! The BVH is obvhs's compressed 8-wide BVH (CWBVH, Ylitie et al. 2017), the measured choice
-//! of `shared/design/dependencies.md`; nothing outside this module sees which BVH is used.
-//! Two measures from there are applied: each triangle's box is padded by 1e-4 of the scene
+//! (docs/design.md, "Ray tracing"); nothing outside this module sees which BVH is used.
+//! Two measures from that comparison are applied: each triangle's box is padded by 1e-4 of the scene
 //! size before the build (flat axis-aligned walls otherwise make traversal very slow), and
 //! triangles are stored in BVH leaf order so that the leaf test reads them sequentially.
 

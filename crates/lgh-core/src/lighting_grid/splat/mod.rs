@@ -1,7 +1,7 @@
 //! The trilinear splat of one level (LGH 2019 section 3.1), parallel and deterministic.
 //!
 //! Each source light adds its trilinear weights w to the 8 vertices of its cell: weight W,
-//! position, squared position, intensity and normal sums (design notes 3.1). On a GPU this is a
+//! position, squared position, intensity and normal sums (docs/design.md, "Hierarchy"). On a GPU this is a
 //! scatter with atomics; here it is organised so that no two tasks ever write the same memory,
 //! without atomics or locks:
 //!

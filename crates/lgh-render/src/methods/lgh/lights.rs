@@ -74,8 +74,7 @@ impl RepSet {
         let [px, py, pz] = &self.position;
         let [nx, ny, nz] = &self.normal;
         // A plain loop over the lanes, not `array::from_fn`: in some builds its closure was
-        // compiled as an out-of-line call, and the shadow-target pass took 44 ms instead of
-        // 33 (1280x720, k = 4).
+        // compiled as an out-of-line call (docs/performance.md, "Shadow targets").
         let mut w = [0.0; SLOTS];
         for (s, w) in w.iter_mut().enumerate() {
             *w = representative_weight(
