@@ -35,12 +35,9 @@ pub struct BuildArgs {
     /// medians.
     #[arg(long, default_value_t = 7)]
     pub runs: usize,
-    /// Worker threads (0 = one per core).
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
-    /// Print one JSON object {runs: [...]} instead of tables.
-    #[arg(long)]
-    pub json: bool,
+    /// Threads and output.
+    #[command(flatten)]
+    pub options: crate::bench_cmd::BenchOptions,
     /// Print the totals as a Markdown table (rows: lights; columns: variants), the form of
     /// docs/performance.md.
     #[arg(long)]
@@ -70,7 +67,7 @@ fn rss(key: &str) -> Option<u64> {
 }
 
 pub fn run(args: &BuildArgs) -> Result<()> {
-    let threads = crate::set_threads(args.threads)?;
+    let threads = args.options.threads()?;
     let levels = args.levels;
     if args.lights.is_empty() || args.lights.contains(&0) {
         bail!("--lights: give one or more positive counts");
@@ -148,7 +145,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
             }));
         }
     }
-    if args.json {
+    if args.options.json {
         println!(
             "{}",
             serde_json::json!({ "threads": threads, "runs": rows })

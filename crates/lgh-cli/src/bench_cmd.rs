@@ -16,6 +16,38 @@ pub fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() { 0.0 } else { v[v.len() / 2] }
 }
 
+/// The options every benchmark has.
+#[derive(Debug, Args)]
+pub struct BenchOptions {
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Print one JSON object instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl BenchOptions {
+    /// Sets the worker threads; returns how many there are.
+    ///
+    /// # Errors
+    /// The thread pool cannot be built.
+    pub fn threads(&self) -> Result<usize> {
+        crate::set_threads(self.threads)
+    }
+}
+
+/// The scene of a benchmark (the built-in Cornell box if none is given), prepared, with its
+/// name.
+///
+/// # Errors
+/// The scene cannot be loaded.
+pub fn open_scene(path: Option<&std::path::Path>) -> Result<(String, World)> {
+    let scene = load_scene(path)?;
+    let name = scene.name.clone();
+    Ok((name, World::new(scene)))
+}
+
 /// Measure performance.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -53,12 +85,9 @@ pub struct RaysArgs {
     /// Rays of each kind.
     #[arg(long, default_value_t = 1_000_000)]
     pub rays: usize,
-    /// Worker threads (0 = one per core).
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
-    /// Print one JSON object instead of text.
-    #[arg(long)]
-    pub json: bool,
+    /// Threads and output.
+    #[command(flatten)]
+    pub options: BenchOptions,
 }
 
 pub fn run(args: &BenchArgs) -> Result<()> {
@@ -74,14 +103,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 pub use crate::bench_build::BuildArgs;
 
 fn rays(args: &RaysArgs) -> Result<()> {
-    let threads = crate::set_threads(args.threads)?;
+    let threads = args.options.threads()?;
     let scene = load_scene(args.scene.as_deref())?;
     let name = scene.name.clone();
     let t = Instant::now();
     let world = World::new(scene);
     let build_ms = t.elapsed().as_secs_f64() * 1e3;
     let r = bench_rays(&world, args.rays.max(1), build_ms);
-    if args.json {
+    if args.options.json {
         let v = serde_json::json!({
             "scene": name,
             "threads": threads,

@@ -11,11 +11,10 @@ use lgh_render::methods::lgh::{LghSettings, LghStats, render_lgh};
 use lgh_render::passes::gbuffer::GBuffer;
 use lgh_render::passes::vpl_gen::{PathNumbers, generate_vpls};
 use lgh_render::settings::{ShadowSettings, Tiling};
-use lgh_render::{FrameMemory, RenderSettings, Silent, World};
+use lgh_render::{FrameMemory, RenderSettings, Silent};
 
 use crate::bench_cmd::median;
 use crate::render_cmd::parse_size;
-use crate::scene_arg::load_scene;
 
 /// Arguments of `lgh bench render`.
 #[derive(Debug, Args)]
@@ -42,12 +41,9 @@ pub struct RenderBenchArgs {
     /// Frames rendered per configuration; every time reported is the median over them.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     pub runs: u32,
-    /// Worker threads (0 = one per core).
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
-    /// Print one JSON object {rows: [...]} instead of tables.
-    #[arg(long)]
-    pub json: bool,
+    /// Threads and output.
+    #[command(flatten)]
+    pub options: crate::bench_cmd::BenchOptions,
     /// Print Table 3 as a Markdown table, the form of docs/performance.md.
     #[arg(long)]
     pub markdown: bool,
@@ -57,10 +53,8 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
     if let Some(n) = args.interleave.iter().find(|n| !(1..=16).contains(*n)) {
         anyhow::bail!("--interleave {n}: expected 1 to 16");
     }
-    let threads = crate::set_threads(args.threads)?;
-    let scene = load_scene(args.scene.as_deref())?;
-    let name = scene.name.clone();
-    let world = World::new(scene);
+    let threads = args.options.threads()?;
+    let (name, world) = crate::bench_cmd::open_scene(args.scene.as_deref())?;
     let (w, h) = args.size;
     let frame = world.scene.camera().frame(w, h);
     // The G-buffer too is timed over `runs` renders; like the frames after the first, the
@@ -159,7 +153,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
             "runs": per_k,
         }));
     }
-    if args.json {
+    if args.options.json {
         println!(
             "{}",
             serde_json::json!({"scene": name, "width": w, "height": h, "threads": threads, "alpha": args.lgh.alpha, "rows": rows})

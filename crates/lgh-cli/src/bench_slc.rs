@@ -49,12 +49,9 @@ pub struct SlcBenchArgs {
     /// Error bound of `pt-slc`, relative to the emitter room's pixel values.
     #[arg(long, default_value_t = 0.005)]
     pub pt_error_bound: f32,
-    /// Worker threads (0 = one per core).
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
-    /// Print one JSON object {vpl_rows, pt_rows} instead of tables.
-    #[arg(long)]
-    pub json: bool,
+    /// Threads and output.
+    #[command(flatten)]
+    pub options: crate::bench_cmd::BenchOptions,
 }
 
 fn indirect_ms(f: &Frame) -> f64 {
@@ -90,10 +87,8 @@ fn row(
 }
 
 pub fn run(args: &SlcBenchArgs) -> Result<()> {
-    let threads = crate::set_threads(args.threads)?;
-    let scene = load_scene(args.scene.as_deref())?;
-    let name = scene.name.clone();
-    let world = World::new(scene);
+    let threads = args.options.threads()?;
+    let (name, world) = crate::bench_cmd::open_scene(args.scene.as_deref())?;
     let base = RenderSettings {
         width: args.size.0,
         height: args.size.1,
@@ -215,7 +210,7 @@ pub fn run(args: &SlcBenchArgs) -> Result<()> {
         }
     }
 
-    if args.json {
+    if args.options.json {
         let v = serde_json::json!({
             "scene": name,
             "threads": threads,

@@ -13,7 +13,6 @@ use lgh_render::sequence::{Sequence, flicker};
 use lgh_render::{Component, RenderSettings, Silent, World};
 
 use crate::render_cmd::parse_size;
-use crate::scene_arg::load_scene;
 
 /// Arguments of `lgh bench temporal`.
 #[derive(Debug, Args)]
@@ -32,12 +31,9 @@ pub struct TemporalBenchArgs {
     /// Weight of the current frame in the moving average.
     #[arg(long, default_value_t = 0.1)]
     pub taa_alpha: f32,
-    /// Worker threads (0 = one per core).
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
-    /// Print one JSON object instead of text.
-    #[arg(long)]
-    pub json: bool,
+    /// Threads and output.
+    #[command(flatten)]
+    pub options: crate::bench_cmd::BenchOptions,
 }
 
 /// Mean flicker over consecutive frames and mean frame time of one run.
@@ -69,10 +65,8 @@ fn run_one(
 }
 
 pub fn run(args: &TemporalBenchArgs) -> Result<()> {
-    let threads = crate::set_threads(args.threads)?;
-    let scene = load_scene(args.scene.as_deref())?;
-    let name = scene.name.clone();
-    let world = World::new(scene);
+    let threads = args.options.threads()?;
+    let (name, world) = crate::bench_cmd::open_scene(args.scene.as_deref())?;
     let base = RenderSettings {
         width: args.size.0,
         height: args.size.1,
@@ -112,7 +106,7 @@ pub fn run(args: &TemporalBenchArgs) -> Result<()> {
             f64::INFINITY
         }
     };
-    if args.json {
+    if args.options.json {
         println!(
             "{}",
             serde_json::json!({

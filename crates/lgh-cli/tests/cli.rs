@@ -250,7 +250,7 @@ fn bench_build_reports_the_paper_table_as_json() {
     }
     assert_error(
         &lgh(&["bench", "build", "--levels", "11"]),
-        &["--levels 11"],
+        &["--levels", "11"],
     );
     assert_error(&lgh(&["bench", "build", "--lights", "0"]), &["--lights"]);
 }

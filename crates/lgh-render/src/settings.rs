@@ -100,8 +100,8 @@ pub struct Tiling {
     /// Default: 1 (none) for lgh, 8 for slc (the papers' settings).
     #[cfg_attr(feature = "clap", arg(long))]
     pub interleave: Option<u32>,
-    /// lgh, slc: screen tile edge in sub-image pixels for light binning. Default: 16 full-
-    /// resolution pixels for lgh (16 / n sub-image pixels with n x n interleaving, at least
+    /// lgh, slc: screen tile edge in sub-image pixels for light binning. Default: 16
+    /// full-resolution pixels for lgh (16 / n sub-image pixels with n x n interleaving, at least
     /// 4), 16 sub-image pixels for slc.
     #[cfg_attr(feature = "clap", arg(long))]
     pub tile: Option<u32>,

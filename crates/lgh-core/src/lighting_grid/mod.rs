@@ -116,8 +116,8 @@ pub enum Construction {
     #[serde(rename = "scatter")]
     ScatterAll,
     /// Each level l >= 2 from the grid lights of level l - 1 by exact restriction (an
-    /// extension; see [`splat::Level::as_restriction_sources`]): the all-scatter hierarchy,
-    /// to rounding, with each level costing about a quarter of the one before.
+    /// extension): the all-scatter hierarchy, to rounding, with each level costing about a
+    /// quarter of the one before (`splat::Level::as_restriction_sources`).
     Restrict,
 }
 

@@ -43,11 +43,11 @@ pub enum TemporalTarget {
 #[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct TemporalSettings {
     /// Weight of the current frame in the temporal moving average.
-    #[cfg_attr(feature = "clap", arg(id = "taa_alpha", long = "taa-alpha", default_value_t = TemporalSettings::default().alpha))]
+    #[cfg_attr(feature = "clap", arg(id = "taa_alpha", long = "taa-alpha", value_name = "TAA_ALPHA", default_value_t = TemporalSettings::default().alpha))]
     pub alpha: f32,
     /// What the temporal filter accumulates: the shadow ratio (the paper's choice) or the
     /// whole indirect light.
-    #[cfg_attr(feature = "clap", arg(id = "taa_target", long = "taa-target", value_enum, default_value_t = TemporalSettings::default().target))]
+    #[cfg_attr(feature = "clap", arg(id = "taa_target", long = "taa-target", value_name = "TAA_TARGET", value_enum, default_value_t = TemporalSettings::default().target))]
     pub target: TemporalTarget,
     /// Largest relative depth difference of a reprojected sample.
     #[cfg_attr(feature = "clap", arg(skip = TemporalSettings::default().depth_tolerance))]

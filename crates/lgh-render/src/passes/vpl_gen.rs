@@ -35,7 +35,7 @@ const BATCH: u64 = 16_384;
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum PathNumbers {
-    /// Path `k` uses the `k`-th point of a scrambled Sobol sequence ([`PathSampler`]): the
+    /// Path k uses point k of a per-frame scrambled Sobol sequence (`PathSampler`): the
     /// paths of one frame are stratified (default).
     #[default]
     Sobol,

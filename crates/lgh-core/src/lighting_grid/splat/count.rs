@@ -9,7 +9,7 @@ use super::sort::Workspace;
 use super::{Sources, layers_per_task};
 
 /// Number of vertices of `level` that receive a non-zero weight from `src` (the length of
-/// [`splat`]'s result, before compaction), without computing their grid lights: after the
+/// [`super::splat`]'s result, before compaction), without computing their grid lights: after the
 /// same sort, one task per vertex layer marks the vertices it touches in a bit set of the
 /// layer (33 KB at 512 cells per axis: it stays in the L1 cache), with the same weight
 /// products as the splat, so the same weights are zero. Used to choose the number of levels.

@@ -60,9 +60,9 @@ pub enum ShadowTarget {
     /// The grid light's centroid, jittered by its deviation (the paper and the demo).
     /// Centroids that fall inside objects or walls report their light as occluded.
     Centroid,
-    /// One of the VPLs the grid light stands for, drawn in proportion to its share
-    /// ([`lgh_core::lighting_grid::representative`]; an extension, the default), then among
-    /// the light's representatives by contribution (see [`JitterAt`]).
+    /// One of the VPLs the grid light stands for, drawn in proportion to its share (an
+    /// extension, the default; `lgh_core::lighting_grid::representative`), then among the
+    /// light's representatives by contribution (see `--jitter-at`).
     Representative,
 }
 

@@ -87,18 +87,6 @@ impl PointCloud {
             area: dist.total() as f32,
         }
     }
-
-    /// Number of points.
-    #[must_use]
-    pub fn len(&self) -> usize {
-        self.position.len()
-    }
-
-    /// True if there is no point.
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        self.position.is_empty()
-    }
 }
 
 /// Program 1 of the paper: true if the point at `p` with normal `n` can cast a shadow in the
@@ -166,7 +154,7 @@ impl ShadowMaps {
         let texels = res * res;
         let mut depth = Vec::new();
         depth.resize(positions.len() * texels, f32::INFINITY);
-        let per_map = (settings.points_per_map as usize).min(cloud.len());
+        let per_map = (settings.points_per_map as usize).min(cloud.position.len());
         // A point stands for the area A / per_map: a disk of that area's radius.
         let point_radius = if per_map > 0 {
             (cloud.area / (std::f32::consts::PI * per_map as f32)).sqrt()
@@ -188,10 +176,10 @@ impl ShadowMaps {
                 if per_map == 0 || range2 <= 0.0 || m == Vec3::ZERO {
                     return 0;
                 }
-                let start = (hash(&[seed, i as u64, 0x15b]) % cloud.len() as u64) as usize;
+                let start = (hash(&[seed, i as u64, 0x15b]) % cloud.position.len() as u64) as usize;
                 let mut kept = 0u64;
                 for k in 0..per_map {
-                    let s = (start + k) % cloud.len();
+                    let s = (start + k) % cloud.position.len();
                     let p = cloud.position[s];
                     if !keep_point(p, cloud.normal[s], q, m, range2) {
                         continue;

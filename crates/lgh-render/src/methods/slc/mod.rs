@@ -216,14 +216,7 @@ pub fn render_slc(
     mode: RangeMode,
     memory: &mut FrameMemory,
 ) -> MethodOutput {
-    let MethodInputs {
-        world,
-        gbuffer: g,
-        camera: frame,
-        vpls,
-        settings: all,
-        ..
-    } = *inputs;
+    let (world, g, vpls, all) = (inputs.world, inputs.gbuffer, inputs.vpls, inputs.settings);
     let (settings, seed) = (&all.slc, all.seed);
     let bound = all.error_bound_or(DEFAULT_ERROR_BOUND, world.scene.exposure);
     let ism = settings.ism_settings();
@@ -241,7 +234,7 @@ pub fn render_slc(
         let sub: Vec<u16> = (0..vpls.len()).map(|i| (i % n2) as u16).collect();
         InterleavedBins::build(
             g,
-            frame,
+            inputs.camera,
             all.tiling.tile.unwrap_or(DEFAULT_TILE),
             n,
             &vpls.positions,
