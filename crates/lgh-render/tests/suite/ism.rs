@@ -43,16 +43,16 @@ fn maps_agree_with_ray_traced_visibility() {
     let cloud = PointCloud::sample(&world, 1 << 16, 1);
     let vpls = PointCloud::sample(&world, 300, 2);
     let receivers = PointCloud::sample(&world, 400, 3);
-    let range = vec![10.0; vpls.len()];
+    let range = vec![10.0; vpls.position.len()];
     let settings = IsmSettings {
         points_per_map: 4096,
         ..IsmSettings::default()
     };
     let maps = ShadowMaps::build(&cloud, &vpls.position, &vpls.normal, &range, &settings, 4);
     let (mut lit, mut lit_ok, mut dark, mut dark_ok) = (0, 0, 0, 0);
-    for i in 0..vpls.len() {
+    for i in 0..vpls.position.len() {
         let (q, m) = (vpls.position[i], vpls.normal[i]);
-        for r in 0..receivers.len() {
+        for r in 0..receivers.position.len() {
             let (x, n) = (receivers.position[r], receivers.normal[r]);
             let d = x - q;
             if d.dot(m) <= 1e-3 || d.dot(n) >= -1e-3 || d.length() < 0.05 {
