@@ -15,8 +15,9 @@
 //!
 //! # Adding a method
 //! Write a type implementing [`IndirectMethod`] in a folder of its own, give it a
-//! [`Method`] constant there, and list that constant in [`METHODS`]: the command line, the
-//! statistics and the benchmarks find it through the registry.
+//! [`Method`] constant there, and add one line for the folder to the `register!` list in
+//! this file: the command line, the statistics and the benchmarks find it through
+//! [`METHODS`]. ARCHITECTURE.md shows the smallest example.
 
 use std::any::Any;
 use std::fmt;
@@ -34,23 +35,22 @@ use crate::settings::{RenderError, RenderSettings};
 use crate::shading::ratio::ShadowRatio;
 use crate::world::World;
 
-pub mod brute;
-pub mod lgh;
-pub mod pt;
-pub mod slc;
+/// Declares each method folder as a module and lists its methods in [`METHODS`].
+macro_rules! register {
+    ($($folder:ident => [$($method:ident),+],)+) => {
+        $(pub mod $folder;)+
+        /// Every method, in the order `--help` lists them.
+        pub static METHODS: &[Method] = &[$($($folder::$method,)+)+];
+    };
+}
 
-/// Every method, in the order `--help` lists them. Registering a method is one line here.
-pub static METHODS: &[Method] = &[
-    brute::BRUTE,
-    brute::BRUTE_UNSHADOWED,
-    lgh::LGH,
-    lgh::LGH_UNSHADOWED,
-    slc::SLC,
-    slc::SLC_CLAMPED,
-    pt::PT_SLC,
-    pt::PT_UNIFORM,
-    pt::PT_CLAMPED,
-];
+// The registry: one line per method folder.
+register! {
+    brute => [BRUTE, BRUTE_UNSHADOWED],
+    lgh => [LGH, LGH_UNSHADOWED],
+    slc => [SLC, SLC_CLAMPED],
+    pt => [PT_SLC, PT_UNIFORM, PT_CLAMPED],
+}
 
 /// What every method shades from.
 #[derive(Clone, Copy)]
