@@ -21,6 +21,26 @@
 //! Every pass is parallel (rayon) and deterministic: the same seed gives the same image
 //! whatever the thread count.
 //!
+//! ```
+//! use lgh_render::methods::lgh::{LGH, LghStats};
+//! use lgh_render::{RenderSettings, Silent, World, render_frame};
+//!
+//! let mut scene = lgh_scene::cornell::cornell_box();
+//! scene.finish(std::path::Path::new("<built-in>"))?;
+//! let world = World::new(scene);
+//! let settings = RenderSettings {
+//!     width: 32,
+//!     height: 18,
+//!     vpls: 500,
+//!     method: LGH,
+//!     ..RenderSettings::default()
+//! };
+//! let frame = render_frame(&world, &settings, &Silent)?;
+//! assert!(frame.indirect.pixels.iter().any(|p| p.x > 0.0));
+//! assert!(frame.stats::<LghStats>().is_some_and(|s| s.grid_lights > 0));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! # Feature flags
 //! - `clap`: the settings structs are `clap::Args` and their enums `clap::ValueEnum`, so a
 //!   command line can take them as flags (the `lgh` binary does).
