@@ -92,6 +92,22 @@ impl Sampler for PathSampler {
     }
 }
 
+/// Point `index` of the 2D Owen-scrambled Sobol set of `seed` (the first two dimensions of
+/// its 4D sequence): the points of one seed are stratified, and sets of different seeds are
+/// independent. Beyond 2^16 points the set continues with independently scrambled blocks.
+#[inline]
+#[must_use]
+pub fn stratified_2d(seed: u64, index: u64) -> Vec2 {
+    let block = index / BLOCK;
+    let s = if block == 0 {
+        seed as u32 ^ (seed >> 32) as u32
+    } else {
+        hash(&[seed, block, 0x2d]) as u32
+    };
+    let v = sobol_burley::sample_4d((index % BLOCK) as u32, 0, s);
+    Vec2::new(v[0], v[1])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -19,10 +19,10 @@ use glam::Vec3;
 use lgh_core::timing::Timings;
 use lgh_scene::camera::CameraFrame;
 
+use crate::direct::render_direct;
 use crate::image::Image;
 use crate::memory::FrameMemory;
 use crate::methods::{Illumination, MethodInputs, MethodOutput, MethodStats};
-use crate::passes::direct::render_direct;
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::vpl_gen::{VplSet, generate_vpls};
 use crate::progress::Progress;
@@ -143,9 +143,20 @@ pub fn render_frame_with(
     let direct = if s.component == Component::Indirect || all_reflected {
         vec![Vec3::ZERO; g.len()]
     } else {
-        t.time("direct", || {
-            render_direct(world, &g, s.seed, s.area_samples, progress)
-        })
+        let out = t.time("direct", || {
+            let filter = &mut memory.filter;
+            render_direct(
+                world,
+                &g,
+                s.seed,
+                s.area_samples,
+                s.direct,
+                filter,
+                progress,
+            )
+        });
+        t.0.extend(out.timings.0);
+        out.radiance
     };
     let inputs = MethodInputs {
         world,

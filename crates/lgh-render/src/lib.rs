@@ -9,7 +9,8 @@
 //! | [`frame`] | the recipe: the passes of a frame in order, with timings |
 //! | [`settings`] | every setting of a frame (the command line derives its flags from them) |
 //! | [`world`] | a scene prepared for rendering: BVH ([`world::accel`]), primary lights ([`world::lights`]), surface points, shadow-ray offsets |
-//! | [`passes`] | the passes every frame runs: G-buffer, direct light, VPLs by light tracing |
+//! | [`passes`] | the passes every frame runs: G-buffer, VPLs by light tracing |
+//! | [`direct`] | direct light: punctual lights exactly, area lights analytic x filtered shadow ratio |
 //! | [`methods`] | the indirect-lighting methods (`brute`, `lgh`, `slc`, `pt`) and their contract |
 //! | [`shading`] | machinery the tiled methods share: tile binning, interleaved sampling, the ratio estimator |
 //! | [`denoise`] | the edge-avoiding a-trous filter and the temporal filter |
@@ -51,6 +52,7 @@
 )]
 
 pub mod denoise;
+pub mod direct;
 pub mod frame;
 pub mod image;
 pub mod memory;

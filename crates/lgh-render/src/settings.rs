@@ -10,6 +10,7 @@
 
 use lgh_core::lighting_grid::{GridError, LevelCount};
 
+use crate::direct::DirectMode;
 use crate::methods::lgh::LghSettings;
 use crate::methods::pt::PtSettings;
 use crate::methods::slc::SlcSettings;
@@ -149,9 +150,15 @@ pub struct RenderSettings {
     /// Which part of the radiance to write.
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = RenderSettings::default().component))]
     pub component: Component,
-    /// Shadow-ray samples per pixel for area lights (emissive triangles) in the direct pass.
+    /// Shadow-ray samples per pixel for area lights (emissive triangles) in the direct pass
+    /// (stratified).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().area_samples))]
     pub area_samples: u32,
+    /// How the direct light of area lights is estimated: `analytic` (closed-form unshadowed
+    /// light times a filtered shadow ratio; noise-free where the light is wholly visible) or
+    /// `sampled` (the plain mean of the shadowed samples).
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = RenderSettings::default().direct))]
+    pub direct: DirectMode,
     /// Camera exposure E: the multiplier of PNG output, and the E of the error bounds of the
     /// light ranges (slc, pt-*). Default: the scene file's, else 1.
     #[cfg_attr(feature = "clap", arg(long))]
@@ -192,7 +199,8 @@ impl Default for RenderSettings {
             path_numbers: PathNumbers::Sobol,
             seed: 0,
             component: Component::All,
-            area_samples: 16,
+            area_samples: 8,
+            direct: DirectMode::Analytic,
             exposure: None,
             error_bound: None,
             clamp_fraction: 0.01,

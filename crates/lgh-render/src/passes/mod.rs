@@ -1,13 +1,12 @@
-//! The passes every frame runs before its method: the G-buffer ([`gbuffer`]), the direct
-//! light ([`direct`]) and the VPLs by light tracing ([`vpl_gen`]), with the helpers of
-//! per-pixel passes.
+//! The passes every frame runs before its method: the G-buffer ([`gbuffer`]) and the VPLs by
+//! light tracing ([`vpl_gen`]), with the helpers of per-pixel passes. The direct light is
+//! [`crate::direct`].
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::progress::Progress;
 
-pub mod direct;
 pub mod gbuffer;
 pub mod vpl_gen;
 

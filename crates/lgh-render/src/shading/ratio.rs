@@ -64,7 +64,8 @@ impl ShadowRatio {
 }
 
 /// S / U per channel, clamped to [0, 1]; 1 where U is zero.
-fn ratio_of(s: &[Vec3], u: &[Vec3]) -> Vec<Vec3> {
+#[must_use]
+pub fn ratio_of(s: &[Vec3], u: &[Vec3]) -> Vec<Vec3> {
     s.par_iter()
         .zip(u)
         .map(|(&s, &u)| {

@@ -31,6 +31,14 @@ pub struct Emitter {
     pub radiance: Vec3,
 }
 
+impl Emitter {
+    /// The three vertices, counter-clockwise from the front.
+    #[must_use]
+    pub fn vertices(&self) -> [Vec3; 3] {
+        [self.v0, self.v0 + self.e1, self.v0 + self.e2]
+    }
+}
+
 /// A point sampled on an area light.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmitterSample {
@@ -148,20 +156,26 @@ impl LightSet {
         (0..self.len()).map(|i| self.power(i)).sum()
     }
 
-    /// A point on the area lights, chosen in proportion to emitted radiance x area, then
-    /// uniformly on the triangle. `None` if there is no area light.
+    /// A point on an area light: an emitter in proportion to radiance x area, then a point
+    /// uniformly on it, for numbers `u` (a 2D point of a low-discrepancy set, or two random
+    /// numbers). The emitter is picked with `u.x`, whose remainder inside the
+    /// picked emitter's interval is the first coordinate of the point on it, so that the
+    /// strata of `u` are kept on the emitters. Also returns the emitter's index.
     #[must_use]
-    pub fn sample_emitter_point(&self, u_pick: f32, u_tri: Vec2) -> Option<EmitterSample> {
+    pub fn sample_emitter(&self, u: Vec2) -> Option<(usize, EmitterSample)> {
         let dist = self.by_radiant_area.as_ref()?;
-        let (i, p) = dist.sample(u_pick);
+        let (i, p, u_x) = dist.sample_remapped(u.x);
         let e = &self.emitters[i];
-        let b = uniform_triangle(u_tri);
-        Some(EmitterSample {
-            position: e.v0 + e.e1 * b.x + e.e2 * b.y,
-            normal: e.normal,
-            radiance: e.radiance,
-            pdf_area: p / e.area,
-        })
+        let b = uniform_triangle(Vec2::new(u_x, u.y));
+        Some((
+            i,
+            EmitterSample {
+                position: e.v0 + e.e1 * b.x + e.e2 * b.y,
+                normal: e.normal,
+                radiance: e.radiance,
+                pdf_area: p / e.area,
+            },
+        ))
     }
 
     /// Starts a light path: picks a light in proportion to its power, then a point and a

@@ -7,8 +7,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use glam::Vec3;
-use lgh_core::rng::Rng;
-use lgh_render::passes::direct::direct_irradiance;
+use lgh_render::direct::direct_irradiance;
 use lgh_render::passes::gbuffer::GBuffer;
 use lgh_render::{Component, RenderSettings, Silent, World, render_frame};
 use lgh_scene::{Light, Material};
@@ -82,8 +81,7 @@ fn area_light_estimate_matches_form_factor() {
     );
     scene.finish(Path::new("<test>")).unwrap();
     let world = World::new(scene);
-    let mut rng = Rng::new(&[3]);
-    let e = direct_irradiance(&world, Vec3::ZERO, Vec3::Y, Vec3::Y, &mut rng, 400_000);
+    let e = direct_irradiance(&world, Vec3::ZERO, Vec3::Y, Vec3::Y, 3, 400_000);
     let x = (a / (2.0 * h)) as f64;
     let y = (b / (2.0 * h)) as f64;
     let quarter = (x / (1.0 + x * x).sqrt() * (y / (1.0 + x * x).sqrt()).atan()

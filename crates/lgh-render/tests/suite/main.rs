@@ -5,6 +5,7 @@ mod analytic;
 mod common;
 mod convergence;
 mod determinism;
+mod direct_light;
 mod formats;
 mod ism;
 mod lgh_method;
