@@ -72,6 +72,10 @@ pub enum BenchWhat {
     /// the brute force at 16K-262K VPLs (time, lights per pixel, error; clamped also at equal
     /// time), and the area-light path tracer against uniform light sampling at equal time.
     Slc(crate::bench_slc::SlcBenchArgs),
+    /// Image quality against time (equal VPLs): every method at several settings against the
+    /// exact brute force on each scene (rel_rmse, FLIP, bias, time), the convergence of
+    /// `--accumulate`, and a log-log plot of error against time.
+    Quality(crate::bench_quality::QualityBenchArgs),
     /// Flicker of a static view with VPLs regenerated every frame, without and with temporal
     /// filtering (LGH paper 4.3), and the time per frame.
     Temporal(crate::bench_temporal::TemporalBenchArgs),
@@ -97,6 +101,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         BenchWhat::Render(a) => crate::bench_render::run(a),
         BenchWhat::Slc(a) => crate::bench_slc::run(a),
         BenchWhat::Temporal(a) => crate::bench_temporal::run(a),
+        BenchWhat::Quality(a) => crate::bench_quality::run(a),
     }
 }
 

@@ -9,6 +9,8 @@
 
 mod bench_build;
 mod bench_cmd;
+mod bench_plot;
+mod bench_quality;
 mod bench_render;
 mod bench_slc;
 mod bench_temporal;

@@ -214,6 +214,9 @@ fn help_explains_every_render_flag() {
         "--out",
         "--component",
         "--stats",
+        "--accumulate",
+        "--direct",
+        "--grid-jitter",
     ] {
         assert!(text.contains(flag), "{flag} missing from --help");
     }
@@ -363,4 +366,88 @@ fn bench_temporal_reports_flicker_with_and_without_the_filter() {
     let reduction = v["reduction_with_taa"].as_f64().unwrap();
     assert!((reduction - without / with).abs() < 1e-9 * reduction);
     assert!(v["reduction_with_taa_indirect"].as_f64().unwrap() > 0.0);
+}
+
+/// `render --accumulate` reports its frames; `bench quality` measures every series against
+/// the brute force, the accumulation curve, and writes the plot.
+#[test]
+fn accumulate_and_bench_quality() {
+    let d = temp_dir("quality");
+    let stats = d.join("a.json");
+    let out = lgh(&[
+        "render",
+        "--accumulate",
+        "3",
+        "--size",
+        "32x18",
+        "--vpls",
+        "200",
+        "--quiet",
+        "--out",
+        s(&d.join("a.exr")),
+        "--stats",
+        s(&stats),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert_eq!(json["accumulated_frames"], 3);
+    assert_error(
+        &lgh(&[
+            "render",
+            "--accumulate",
+            "2",
+            "--frames",
+            "0..2",
+            "--out",
+            "f_####.png",
+        ]),
+        &["--accumulate", "--frames"],
+    );
+    let plot = d.join("q.png");
+    let out = lgh(&[
+        "bench",
+        "quality",
+        "builtin:cornell",
+        "--size",
+        "32x18",
+        "--vpls",
+        "300",
+        "--accumulate",
+        "1,2",
+        "--accumulate-size",
+        "24x16",
+        "--accumulate-vpls",
+        "200",
+        "--plot",
+        s(&plot),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let points = v["points"].as_array().unwrap();
+    for series in [
+        "lgh",
+        "lgh alpha 2",
+        "lgh 4x4",
+        "slc",
+        "slc-clamped",
+        "lgh --accumulate",
+    ] {
+        assert!(
+            points
+                .iter()
+                .any(|p| p["series"] == series && p["flip"].as_f64().unwrap() > 0.0),
+            "{series}"
+        );
+    }
+    assert!(std::fs::metadata(&plot).unwrap().len() > 1000);
 }

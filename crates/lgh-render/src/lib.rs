@@ -15,6 +15,7 @@
 //! | [`shading`] | machinery the tiled methods share: tile binning, interleaved sampling, the ratio estimator |
 //! | [`denoise`] | the edge-avoiding a-trous filter and the temporal filter |
 //! | [`sequence`] | frame sequences with temporal filtering; flicker |
+//! | [`accumulate`] | progressive rendering: the mean of N frames with independent VPL sets |
 //! | [`memory`] | working memory frames reuse |
 //! | [`image`] | EXR/PNG files, tone mapping, image metrics |
 //! | [`progress`], [`raybench`] | progress reporting; ray throughput |
@@ -51,6 +52,7 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+pub mod accumulate;
 pub mod denoise;
 pub mod direct;
 pub mod frame;

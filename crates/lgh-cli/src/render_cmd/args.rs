@@ -32,6 +32,12 @@ pub struct RenderArgs {
     /// The rendering settings.
     #[command(flatten)]
     pub settings: RenderSettings,
+    /// Render N frames of the (static) view with independent VPL sets (seeds derived from
+    /// --seed; for lgh also a random grid offset each) and write their mean: a progressive
+    /// render that converges as N grows. For brute it is the brute force over the union of
+    /// the N VPL sets, so the two are comparable.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub accumulate: u32,
     /// Render a sequence of frames A..B (B excluded, e.g. 0..48) of the scene's animation;
     /// --out must then contain #### (replaced by the zero-padded frame number). VPLs and all
     /// random numbers are new in every frame (seed + frame number).

@@ -6,9 +6,10 @@ mod stats;
 use std::time::Instant;
 
 use anyhow::{Result, bail};
+use lgh_render::accumulate::render_accumulated;
 use lgh_render::image::check_output_path;
 use lgh_render::sequence::Sequence;
-use lgh_render::{RenderSettings, World, render_frame};
+use lgh_render::{FrameMemory, RenderSettings, World, render_frame};
 
 use args::frame_path;
 pub use args::{RenderArgs, parse_size};
@@ -24,6 +25,9 @@ fn check_args(args: &RenderArgs) -> Result<()> {
             "{}: with --frames the output name needs #### for the frame number (e.g. frames/frame_####.png)",
             args.out.display()
         );
+    }
+    if args.frames.is_some() && args.accumulate > 1 {
+        bail!("--accumulate and --frames cannot be combined (accumulation renders one view)");
     }
     args.temporal.validate()?;
     if !args.fps.is_finite() || args.fps <= 0.0 {
@@ -112,7 +116,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if let Some(frames) = args.frames {
         return run_sequence(args, world, &settings, frames, exposure, &bars);
     }
-    let frame = render_frame(&world, &settings, &bars)?;
+    let frame = if args.accumulate > 1 {
+        let mut memory = FrameMemory::default();
+        render_accumulated(&world, &settings, args.accumulate, &bars, &mut memory)?
+    } else {
+        render_frame(&world, &settings, &bars)?
+    };
     frame.image.save(&args.out, exposure)?;
     if let (Some(path), Some(counts)) = (&args.heatmap, &frame.method.lights_per_pixel) {
         let max = crate::heatmap::write(path, settings.width, settings.height, counts)?;
@@ -128,6 +137,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             triangles: world.accel.len(),
             load_ms,
             bvh_ms,
+            frames: args.accumulate,
         };
         write_json(path, &FrameReport::new(&frame, &context))?;
     }

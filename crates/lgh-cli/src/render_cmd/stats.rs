@@ -35,7 +35,9 @@ pub struct FrameReport<'a> {
     pub threads: usize,
     /// Triangles in the BVH.
     pub triangles: usize,
-    /// Per-pass wall times in ms (`total` includes the BVH build).
+    /// Frames averaged (`--accumulate`).
+    pub accumulated_frames: u32,
+    /// Per-pass wall times in ms, summed over the frames (`total` includes the BVH build).
     pub timings_ms: serde_json::Map<String, serde_json::Value>,
     /// The method's own statistics.
     #[serde(flatten)]
@@ -58,6 +60,8 @@ pub struct ReportContext<'a> {
     pub load_ms: f64,
     /// BVH build time.
     pub bvh_ms: f64,
+    /// Frames averaged.
+    pub frames: u32,
 }
 
 impl<'a> FrameReport<'a> {
@@ -89,6 +93,7 @@ impl<'a> FrameReport<'a> {
             seed: s.seed,
             threads: c.threads,
             triangles: c.triangles,
+            accumulated_frames: c.frames,
             timings_ms: timings,
             method_stats,
             settings: s,

@@ -226,6 +226,10 @@ impl LightingGrid {
     }
 }
 
+/// How far [`GridBuilder::set_shift`] enlarges the lights' bounds, as a fraction of their
+/// longest edge.
+const JITTER_SCALE: f32 = 0.125;
+
 /// Builds lighting grid hierarchies frame after frame, keeping its working memory and the
 /// output buffers between builds (as a GPU renderer keeps its buffers).
 #[derive(Debug, Default)]
@@ -233,9 +237,21 @@ pub struct GridBuilder {
     ws: splat::Workspace,
     levels: Vec<Level>,
     grid: Option<LightingGrid>,
+    shift: Option<Vec3>,
 }
 
 impl GridBuilder {
+    /// Places the grids of the next builds at an offset: with `Some(u)`, u in [0, 1)^3, the
+    /// lights' bounds are enlarged by an eighth of their longest edge on every axis, the enlarged box
+    /// starting u x that much below them, so that every level's vertices move by a random
+    /// fraction of their spacing. Averaging frames built with independent offsets turns the
+    /// hierarchy's structured error (light clustered where the grid happens to fall) into
+    /// noise that averages away (docs/design.md, "Accumulation"). `None` (the default): the
+    /// grid centred on the bounds, as the paper builds it.
+    pub fn set_shift(&mut self, shift: Option<Vec3>) {
+        self.shift = shift.map(|u| u.clamp(Vec3::ZERO, Vec3::ONE));
+    }
+
     /// Builds the hierarchy of `lights`; the result is [`GridBuilder::grid`].
     ///
     /// # Errors
@@ -248,6 +264,13 @@ impl GridBuilder {
     ) -> Result<BuildTimings, GridError> {
         let mut t = BuildTimings::default();
         let (lo, hi) = t.time("bounds", || bounds(lights))?;
+        let (lo, hi) = match self.shift {
+            Some(u) => {
+                let d = Vec3::splat(JITTER_SCALE * (hi - lo).max_element());
+                (lo - u * d, hi + (Vec3::ONE - u) * d)
+            }
+            None => (lo, hi),
+        };
         let src = lights.sources();
         if self.levels.is_empty() {
             self.levels.push(Level::default());

@@ -1,6 +1,7 @@
 //! The integration tests of lgh-render, in one binary (one link instead of one per file).
 
 mod accel;
+mod accumulate;
 mod analytic;
 mod common;
 mod convergence;

@@ -41,6 +41,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 use lgh_core::lighting_grid::{GridError, InputLights};
+use lgh_core::rng::Rng;
 use lgh_core::timing::Timings;
 use lgh_core::vpl::Vpls;
 use rayon::prelude::*;
@@ -63,6 +64,9 @@ use light_batch::LightBatch;
 use lights::{ShadeLights, split_by_normal};
 pub use settings::{JitterAt, LghSettings, ShadowTarget, auto_tile};
 use shade::{RowContext, shade_row};
+
+/// Random-stream tag of the grid offset of `--grid-jitter`.
+const STREAM_GRID_SHIFT: u64 = 0x6a1d;
 
 /// The lighting grid hierarchy with stochastic ray-traced shadows.
 pub const LGH: Method = Method::new(&Lgh { shadowed: true });
@@ -143,6 +147,10 @@ pub fn render_lgh(
     } = *inputs;
     let (settings, seed) = (&all.lgh, all.seed);
     let builder = &mut memory.grid;
+    builder.set_shift(settings.grid_jitter.then(|| {
+        let mut rng = Rng::new(&[seed, STREAM_GRID_SHIFT]);
+        Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())
+    }));
     let mut t = Timings::default();
     let n_px = g.len();
     let k = all.shadows.k(shadowed);

@@ -36,6 +36,10 @@ pub struct LghSettings {
     /// emission (docs/design.md, "Normal bins").
     #[cfg_attr(feature = "clap", arg(long))]
     pub normal_bins: bool,
+    /// lgh: place the hierarchy's grids at a random offset drawn from the seed, so that
+    /// frames of different seeds cluster the VPLs differently (`--accumulate` turns it on).
+    #[cfg_attr(feature = "clap", arg(long))]
+    pub grid_jitter: bool,
     /// lgh: how a grid light's emission depends on direction.
     #[cfg_attr(feature = "clap", arg(long = "grid-emission", value_enum, default_value_t = LghSettings::default().emission))]
     pub emission: GridEmission,
@@ -91,6 +95,7 @@ impl Default for LghSettings {
             dev_scale: 0.5,
             construction: Construction::Restrict,
             normal_bins: false,
+            grid_jitter: false,
             emission: GridEmission::EnergyConserving,
             jitter: JitterAt::Ray,
             shadow_target: ShadowTarget::Representative,

@@ -1,0 +1,180 @@
+//! The plot of `lgh bench quality`: error against time, log-log, one column per scene, FLIP
+//! above and rel_rmse below, one curve per method (plotters, drawn into memory and written
+//! as PNG). Text needs a TrueType font: DejaVu Sans from the system (Debian's
+//! `fonts-dejavu-core`), or the file `LGH_FONT` names; without one the plot has no labels.
+
+use std::path::Path;
+
+use anyhow::{Context, Result, anyhow, bail};
+use plotters::prelude::*;
+
+use crate::bench_quality::Point;
+
+/// Where to look for a font.
+const FONTS: [&str; 3] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+];
+
+/// Registers a font for plotters' text once; false if none was found.
+fn register_font() -> bool {
+    static FOUND: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *FOUND.get_or_init(|| {
+        let candidates = std::env::var("LGH_FONT")
+            .into_iter()
+            .chain(FONTS.map(String::from));
+        for path in candidates {
+            if let Ok(bytes) = std::fs::read(&path) {
+                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+                if plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).is_ok() {
+                    return true;
+                }
+            }
+        }
+        false
+    })
+}
+
+/// Checks that the plot can be written there (a .png in an existing folder).
+///
+/// # Errors
+/// Another extension, or a missing folder.
+pub fn check_plot_path(path: &Path) -> Result<()> {
+    if !path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+    {
+        bail!("{}: the plot is a PNG (.png)", path.display());
+    }
+    if let Some(dir) = path.parent()
+        && !dir.as_os_str().is_empty()
+        && !dir.is_dir()
+    {
+        bail!(
+            "{}: folder {} does not exist",
+            path.display(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// Colours of the curves, by order of first appearance.
+const COLOURS: [RGBColor; 8] = [
+    RGBColor(214, 39, 40),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+    RGBColor(31, 119, 180),
+    RGBColor(44, 160, 44),
+    RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
+    RGBColor(127, 127, 127),
+];
+
+/// Draws the plot of `points` for `scenes` into `path`.
+///
+/// # Errors
+/// Drawing fails, or the file cannot be written.
+pub fn plot(path: &Path, scenes: &[String], points: &[Point]) -> Result<()> {
+    let text = register_font();
+    let (cw, ch) = (420u32, 320u32);
+    let w = (cw * scenes.len().max(1) as u32).max(170 * 8);
+    let h = 2 * ch + 40;
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    let mut names: Vec<&str> = Vec::new();
+    for p in points {
+        if !names.contains(&p.series.as_str()) && p.ms > 0.0 && p.flip > 0.0 {
+            names.push(&p.series);
+        }
+    }
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        let (legend, body) = root.split_vertically(40);
+        if text {
+            for (i, name) in names.iter().enumerate() {
+                let x = 10 + 170 * i as i32;
+                let c = COLOURS[i % COLOURS.len()];
+                legend
+                    .draw(&Rectangle::new([(x, 14), (x + 20, 24)], c.filled()))
+                    .map_err(|e| anyhow!("plot: {e}"))?;
+                legend
+                    .draw(&Text::new(
+                        name.to_string(),
+                        (x + 26, 12),
+                        ("sans-serif", 14),
+                    ))
+                    .map_err(|e| anyhow!("plot: {e}"))?;
+            }
+        }
+        let rows = body.split_evenly((2, scenes.len().max(1)));
+        for (k, area) in rows.iter().enumerate() {
+            let (row, col) = (k / scenes.len().max(1), k % scenes.len().max(1));
+            let Some(scene) = scenes.get(col) else {
+                continue;
+            };
+            let metric = |p: &Point| if row == 0 { p.flip } else { p.rel_rmse };
+            let pts: Vec<&Point> = points
+                .iter()
+                .filter(|p| &p.scene == scene && p.ms > 0.0 && metric(p) > 0.0)
+                .collect();
+            if pts.is_empty() {
+                continue;
+            }
+            let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, 0.0f64, f64::MAX, 0.0f64);
+            for p in &pts {
+                (x0, x1) = (x0.min(p.ms), x1.max(p.ms));
+                (y0, y1) = (y0.min(metric(p)), y1.max(metric(p)));
+            }
+            let caption = format!("{scene}: {}", if row == 0 { "FLIP" } else { "rel_rmse" });
+            let mut builder = ChartBuilder::on(area);
+            builder.margin(8);
+            if text {
+                builder
+                    .caption(caption, ("sans-serif", 16))
+                    .x_label_area_size(30)
+                    .y_label_area_size(48);
+            }
+            let mut chart = builder
+                .build_cartesian_2d(
+                    (x0 * 0.8..x1 * 1.25).log_scale(),
+                    (y0 * 0.8..y1 * 1.25).log_scale(),
+                )
+                .map_err(|e| anyhow!("plot: {e}"))?;
+            let mut mesh = chart.configure_mesh();
+            if text {
+                mesh.x_desc("ms (VPL generation + indirect light)")
+                    .y_desc(if row == 0 { "FLIP" } else { "rel_rmse" })
+                    .label_style(("sans-serif", 12));
+            } else {
+                mesh.disable_x_axis().disable_y_axis();
+            }
+            mesh.draw().map_err(|e| anyhow!("plot: {e}"))?;
+            for (i, name) in names.iter().enumerate() {
+                let c = COLOURS[i % COLOURS.len()];
+                let mut curve: Vec<(f64, f64)> = pts
+                    .iter()
+                    .filter(|p| p.series == *name)
+                    .map(|p| (p.ms, metric(p)))
+                    .collect();
+                curve.sort_by(|a, b| a.0.total_cmp(&b.0));
+                chart
+                    .draw_series(LineSeries::new(curve.clone(), c.stroke_width(2)))
+                    .map_err(|e| anyhow!("plot: {e}"))?;
+                chart
+                    .draw_series(curve.iter().map(|&p| Circle::new(p, 3, c.filled())))
+                    .map_err(|e| anyhow!("plot: {e}"))?;
+            }
+        }
+        root.present().map_err(|e| anyhow!("plot: {e}"))?;
+    }
+    let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| anyhow!("plot buffer"))?;
+    img.save(path)
+        .with_context(|| format!("{}: cannot write the plot", path.display()))?;
+    if !text {
+        eprintln!(
+            "note: no font found for the plot's labels (install fonts-dejavu-core or set LGH_FONT)"
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,304 @@
+//! `lgh bench quality`: error against time, per method and scene, at equal VPLs: each
+//! method at several settings against the exact brute force over the same VPLs, and the
+//! convergence of `--accumulate` (lgh against brute, both accumulated over N frames).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Result, anyhow};
+use clap::Args;
+use lgh_render::accumulate::{frame_settings, render_accumulated};
+use lgh_render::frame::render_frame_with;
+use lgh_render::image::ImageFormat;
+use lgh_render::image::metrics::{diff, display_bytes, flip_mean};
+use lgh_render::methods::brute::BRUTE;
+use lgh_render::methods::lgh::LGH;
+use lgh_render::methods::slc::{SLC, SLC_CLAMPED};
+use lgh_render::settings::{ShadowSettings, Tiling};
+use lgh_render::{Component, Frame, FrameMemory, Image, RenderSettings, Silent, World};
+
+use crate::bench_cmd::{BenchOptions, open_scene};
+use crate::render_cmd::parse_size;
+
+/// Arguments of `lgh bench quality`.
+#[derive(Debug, Args)]
+pub struct QualityBenchArgs {
+    /// Scenes (files or builtin:NAME). Default: builtin:cornell and the project's test scenes
+    /// (scenes/test/*.toml of the source tree).
+    pub scenes: Vec<PathBuf>,
+    /// Image size of the equal-VPL comparison, WIDTHxHEIGHT.
+    #[arg(long, default_value = "320x180", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// VPLs of the equal-VPL comparison.
+    #[arg(long, default_value_t = 20_000)]
+    pub vpls: usize,
+    /// Frame counts of the accumulation curve, comma-separated (empty: no curve).
+    #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16")]
+    pub accumulate: Vec<u32>,
+    /// Image size of the accumulation curve.
+    #[arg(long, default_value = "96x54", value_parser = parse_size)]
+    pub accumulate_size: (u32, u32),
+    /// VPLs per frame of the accumulation curve.
+    #[arg(long, default_value_t = 2000)]
+    pub accumulate_vpls: usize,
+    /// The error-against-time plot (log-log PNG: FLIP and rel_rmse per scene).
+    #[arg(long, default_value = "bench-quality.png")]
+    pub plot: PathBuf,
+    /// Threads and output.
+    #[command(flatten)]
+    pub options: BenchOptions,
+}
+
+/// One measured point.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Point {
+    /// Scene name.
+    pub scene: String,
+    /// The curve: a method and its fixed settings.
+    pub series: String,
+    /// The setting varied along the curve.
+    pub setting: String,
+    /// Time of the indirect light (VPL generation included), ms.
+    pub ms: f64,
+    /// rel_rmse against the reference.
+    pub rel_rmse: f64,
+    /// Mean LDR-FLIP against the reference.
+    pub flip: f64,
+    /// Relative bias of the mean luminance.
+    pub rel_bias: f64,
+}
+
+/// The scenes when none is given.
+fn default_scenes() -> Vec<PathBuf> {
+    let mut out = vec![PathBuf::from("builtin:cornell")];
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/test");
+    if let Ok(entries) = std::fs::read_dir(&dir) {
+        let mut files: Vec<PathBuf> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+            .collect();
+        files.sort();
+        out.extend(files);
+    }
+    out
+}
+
+/// Time of a frame's indirect light with its VPL generation.
+fn ms(f: &Frame) -> f64 {
+    f.timings.get("indirect").unwrap_or(0.0) + f.timings.get("vpl_generation").unwrap_or(0.0)
+}
+
+/// The metrics of `f` against `reference`.
+fn measure(f: &Image, reference: &Image, exposure: f32) -> Result<(f64, f64, f64)> {
+    let m = diff(f, reference).map_err(|e| anyhow!("{e}"))?;
+    let flip = flip_mean(
+        &display_bytes(f, ImageFormat::Exr, exposure),
+        &display_bytes(reference, ImageFormat::Exr, exposure),
+        f.width,
+        f.height,
+    )
+    .map_err(|e| anyhow!("{e}"))?;
+    Ok((m.rel_rmse, flip, m.rel_bias))
+}
+
+/// The curves of the equal-VPL comparison: (series, setting label, settings).
+fn series(base: &RenderSettings) -> Vec<(&'static str, String, RenderSettings)> {
+    let mut out = Vec::new();
+    let shadows = |k: u32| ShadowSettings {
+        samples: k,
+        ..ShadowSettings::default()
+    };
+    for k in [1, 4, 16] {
+        let lgh = RenderSettings {
+            method: LGH,
+            shadows: shadows(k),
+            ..base.clone()
+        };
+        let mut alpha2 = lgh.clone();
+        alpha2.lgh.alpha = 2.0;
+        let il4 = RenderSettings {
+            tiling: Tiling {
+                interleave: Some(4),
+                ..Tiling::default()
+            },
+            ..lgh.clone()
+        };
+        out.push(("lgh", format!("k={k}"), lgh));
+        out.push(("lgh alpha 2", format!("k={k}"), alpha2));
+        out.push(("lgh 4x4", format!("k={k}"), il4));
+    }
+    for eb in [0.01f32, 0.002, 0.0005] {
+        let slc = RenderSettings {
+            method: SLC,
+            error_bound: Some(eb),
+            ..base.clone()
+        };
+        out.push(("slc", format!("eb={eb}"), slc));
+    }
+    for eb in [0.5f32, 0.1, 0.02] {
+        let clamped = RenderSettings {
+            method: SLC_CLAMPED,
+            error_bound: Some(eb),
+            ..base.clone()
+        };
+        out.push(("slc-clamped", format!("eb={eb}"), clamped));
+    }
+    out
+}
+
+fn render(world: &World, s: &RenderSettings) -> Result<Frame> {
+    render_frame_with(world, s, &Silent, &mut FrameMemory::default()).map_err(|e| anyhow!("{e}"))
+}
+
+/// The accumulation curve of one scene: lgh --accumulate N against brute --accumulate N.
+fn accumulation(
+    world: &World,
+    name: &str,
+    args: &QualityBenchArgs,
+    exposure: f32,
+) -> Result<Vec<Point>> {
+    let Some(&max_n) = args.accumulate.iter().max() else {
+        return Ok(Vec::new());
+    };
+    let base = RenderSettings {
+        width: args.accumulate_size.0,
+        height: args.accumulate_size.1,
+        vpls: args.accumulate_vpls,
+        area_samples: 0,
+        component: Component::Indirect,
+        ..RenderSettings::default()
+    };
+    let brute = RenderSettings {
+        method: BRUTE,
+        ..base.clone()
+    };
+    // Brute-force frames do not depend on the frame count: the prefix means are the
+    // accumulated references.
+    let mut sums: Vec<glam::Vec3> = Vec::new();
+    let mut references = Vec::new();
+    for k in 0..max_n {
+        let f = render(world, &frame_settings(&brute, k, max_n))?;
+        if sums.is_empty() {
+            sums = vec![glam::Vec3::ZERO; f.indirect.pixels.len()];
+        }
+        for (s, p) in sums.iter_mut().zip(&f.indirect.pixels) {
+            *s += *p;
+        }
+        if args.accumulate.contains(&(k + 1)) {
+            let inv = 1.0 / (k + 1) as f32;
+            let mean = sums.iter().map(|p| *p * inv).collect();
+            references.push((k + 1, Image::from_pixels(base.width, base.height, mean)));
+        }
+    }
+    let mut out = Vec::new();
+    for (n, reference) in references {
+        let lgh = RenderSettings {
+            method: LGH,
+            ..base.clone()
+        };
+        let f = render_accumulated(world, &lgh, n, &Silent, &mut FrameMemory::default())
+            .map_err(|e| anyhow!("{e}"))?;
+        let (rel_rmse, flip, rel_bias) = measure(&f.indirect, &reference, exposure)?;
+        out.push(Point {
+            scene: name.to_string(),
+            series: "lgh --accumulate".into(),
+            setting: format!("N={n}"),
+            ms: ms(&f),
+            rel_rmse,
+            flip,
+            rel_bias,
+        });
+    }
+    Ok(out)
+}
+
+pub fn run(args: &QualityBenchArgs) -> Result<()> {
+    let threads = args.options.threads()?;
+    crate::bench_plot::check_plot_path(&args.plot)?;
+    let scenes = if args.scenes.is_empty() {
+        default_scenes()
+    } else {
+        args.scenes.clone()
+    };
+    let mut points = Vec::new();
+    let mut scene_names = Vec::new();
+    for path in &scenes {
+        let (name, world) = open_scene(Some(path))?;
+        let exposure = world.scene.exposure;
+        let base = RenderSettings {
+            width: args.size.0,
+            height: args.size.1,
+            vpls: args.vpls,
+            area_samples: 0,
+            component: Component::Indirect,
+            ..RenderSettings::default()
+        };
+        if !args.options.json {
+            eprintln!("{name}: brute-force reference ({} VPLs)...", args.vpls);
+        }
+        let reference = render(
+            &world,
+            &RenderSettings {
+                method: BRUTE,
+                ..base.clone()
+            },
+        )?;
+        for (series, setting, s) in series(&base) {
+            let f = render(&world, &s)?;
+            let (rel_rmse, flip, rel_bias) = measure(&f.indirect, &reference.indirect, exposure)?;
+            points.push(Point {
+                scene: name.clone(),
+                series: series.into(),
+                setting,
+                ms: ms(&f),
+                rel_rmse,
+                flip,
+                rel_bias,
+            });
+        }
+        points.extend(accumulation(&world, &name, args, exposure)?);
+        points.push(Point {
+            scene: name.clone(),
+            series: "brute (reference)".into(),
+            setting: String::new(),
+            ms: ms(&reference),
+            rel_rmse: 0.0,
+            flip: 0.0,
+            rel_bias: 0.0,
+        });
+        scene_names.push(name);
+    }
+    crate::bench_plot::plot(&args.plot, &scene_names, &points)?;
+    if args.options.json {
+        let v = serde_json::json!({
+            "threads": threads,
+            "width": args.size.0,
+            "height": args.size.1,
+            "vpls": args.vpls,
+            "points": points,
+            "plot": args.plot,
+        });
+        println!("{v}");
+        return Ok(());
+    }
+    println!(
+        "Indirect light against the brute force, {}x{}, {} VPLs ({}x{}, {} VPLs a frame for --accumulate), {threads} threads",
+        args.size.0,
+        args.size.1,
+        args.vpls,
+        args.accumulate_size.0,
+        args.accumulate_size.1,
+        args.accumulate_vpls
+    );
+    println!(
+        "{:<14} {:<18} {:<9} {:>9} {:>9} {:>7} {:>9}",
+        "scene", "method", "setting", "ms", "rel_rmse", "FLIP", "rel_bias"
+    );
+    for p in &points {
+        println!(
+            "{:<14} {:<18} {:<9} {:>9.1} {:>9.4} {:>7.4} {:>+9.4}",
+            p.scene, p.series, p.setting, p.ms, p.rel_rmse, p.flip, p.rel_bias
+        );
+    }
+    println!("plot: {}", args.plot.display());
+    Ok(())
+}
