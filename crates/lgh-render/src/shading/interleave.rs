@@ -130,6 +130,10 @@ pub struct BlurParams {
     pub z_diff: f32,
     /// Normal discontinuity: 1 - n . n' above this.
     pub n_diff: f32,
+    /// The interleaving n the blur recombines: a walk that a discontinuity cuts short is
+    /// averaged phase by phase (taps at offsets k with the same k mod n come from the same
+    /// sub-image), so that every sub-image counts equally; 1 for a plain blur.
+    pub phases: u32,
 }
 
 impl BlurParams {
@@ -141,26 +145,26 @@ impl BlurParams {
             sigma: 3.0,
             z_diff: 8.0,
             n_diff: 0.5,
+            phases: 1,
         }
     }
 }
 
-/// Marks discontinuity pixels: a pixel is one if, towards any of its neighbours (1, 0),
-/// (0, 1) and (1, 1), the depth jumps by more than `z_diff` times the local depth gradient,
-/// or the normals differ by more than `n_diff` in 1 - n . n', or exactly one of the two sees
-/// a surface.
+/// A jump between a pixel and its neighbour at (1, 0) ([`JUMP_X`]) and at (0, 1)
+/// ([`JUMP_Y`]), one bit each per pixel: the depth jumps by more than `z_diff` times the local
+/// depth gradient, or the normals differ by more than `n_diff` in 1 - n . n', or exactly one
+/// of the two sees a surface. Kept per axis, so that a walk along an edge (between pixels on
+/// the same side) is not stopped by the jump across it: a pixel on a vertical edge still
+/// blurs up and down, and every sub-image of the interleaving reaches it (docs/design.md,
+/// "Interleaved sampling").
 #[must_use]
-pub fn discontinuities(g: &GBuffer, p: &BlurParams) -> Vec<bool> {
+pub fn discontinuities(g: &GBuffer, p: &BlurParams) -> Vec<u8> {
     let (w, h) = (g.width as usize, g.height as usize);
     (0..w * h)
         .into_par_iter()
         .map(|i| {
             let (x, y) = (i % w, i / w);
             let hit = g.is_hit(i);
-            if !hit {
-                return false;
-            }
-            let z = g.depth[i];
             // Local depth slope per axis: the smaller one-sided difference, which at an edge
             // is the one on this pixel's own surface (a screen-space derivative would
             // straddle the edge). The test scale is the larger of the two axes' slopes.
@@ -169,37 +173,50 @@ pub fn discontinuities(g: &GBuffer, p: &BlurParams) -> Vec<bool> {
                     .into_iter()
                     .flatten()
                     .filter(|&j| g.is_hit(j))
-                    .map(|j| (g.depth[j] - z).abs())
+                    .map(|j| (g.depth[j] - g.depth[i]).abs())
                     .fold(f32::INFINITY, f32::min)
             };
-            let gx = slope((x > 0).then(|| i - 1), (x + 1 < w).then_some(i + 1));
-            let gy = slope((y > 0).then(|| i - w), (y + 1 < h).then_some(i + w));
-            let finite = |v: f32| if v.is_finite() { v } else { 0.0 };
-            let scale = finite(gx).max(finite(gy)).max(1e-4);
-            let mut disc = false;
-            for (dx, dy) in [(1usize, 0usize), (0, 1), (1, 1)] {
-                if x + dx >= w || y + dy >= h {
-                    continue;
+            let scale = if hit {
+                let gx = slope((x > 0).then(|| i - 1), (x + 1 < w).then_some(i + 1));
+                let gy = slope((y > 0).then(|| i - w), (y + 1 < h).then_some(i + w));
+                let finite = |v: f32| if v.is_finite() { v } else { 0.0 };
+                finite(gx).max(finite(gy)).max(1e-4)
+            } else {
+                1.0
+            };
+            let jump = |j: usize| {
+                if hit != g.is_hit(j) {
+                    return true;
                 }
-                let j = i + dy * w + dx;
-                if !g.is_hit(j) {
-                    disc = true;
-                } else {
-                    let dz = (g.depth[j] - z).abs() / scale;
-                    let dn = 1.0 - g.normal[i].dot(g.normal[j]);
-                    disc |= dz > p.z_diff || dn > p.n_diff;
+                if !hit {
+                    return false;
                 }
+                let dz = (g.depth[j] - g.depth[i]).abs() / scale;
+                let dn = 1.0 - g.normal[i].dot(g.normal[j]);
+                dz > p.z_diff || dn > p.n_diff
+            };
+            let mut flags = 0;
+            if x + 1 < w && jump(i + 1) {
+                flags |= JUMP_X;
             }
-            disc
+            if y + 1 < h && jump(i + w) {
+                flags |= JUMP_Y;
+            }
+            flags
         })
         .collect()
 }
 
-/// Separable Gaussian blur that walks outwards from each pixel and stops at the first
-/// discontinuity pixel in each direction (the pixel itself always counts); weights are
+/// [`discontinuities`] bit: a jump to the neighbour at (1, 0).
+pub const JUMP_X: u8 = 1;
+/// [`discontinuities`] bit: a jump to the neighbour at (0, 1).
+pub const JUMP_Y: u8 = 2;
+
+/// Separable Gaussian blur that walks outwards from each pixel and stops before the first
+/// jump along its axis ([`discontinuities`]; the pixel itself always counts); weights are
 /// renormalised over the taps used. Pixels that see nothing are left as they are.
 #[must_use]
-pub fn blur(img: &[Vec3], g: &GBuffer, disc: &[bool], p: &BlurParams) -> Vec<Vec3> {
+pub fn blur(img: &[Vec3], g: &GBuffer, disc: &[u8], p: &BlurParams) -> Vec<Vec3> {
     let [out] = blur_n([img.to_vec()], g, disc, p);
     out
 }
@@ -210,7 +227,7 @@ pub fn blur(img: &[Vec3], g: &GBuffer, disc: &[bool], p: &BlurParams) -> Vec<Vec
 pub fn blur_n<const N: usize>(
     mut imgs: [Vec<Vec3>; N],
     g: &GBuffer,
-    disc: &[bool],
+    disc: &[u8],
     p: &BlurParams,
 ) -> [Vec<Vec3>; N] {
     let w = g.width as usize;
@@ -219,11 +236,11 @@ pub fn blur_n<const N: usize>(
         .map(|k| (-((k * k) as f32) / (2.0 * p.sigma * p.sigma)).exp())
         .collect();
     // How far the walk goes from each pixel, per direction: it stops before a step that
-    // leaves the image, leaves a discontinuity pixel forwards, enters one backwards, or
-    // enters a pixel that sees nothing. Known before the sums, the taps need no tests.
+    // leaves the image, crosses a jump along its axis, or enters a pixel that sees nothing. Known before the sums, the taps need no tests.
     let (right, left) = runs(g, disc, r, false);
     let (down, up) = runs(g, disc, r, true);
     let full_sum: f32 = weights[0] + 2.0 * weights[1..].iter().sum::<f32>();
+    let phases = (p.phases as usize).clamp(1, MAX_PHASES);
     // One pass: out[i] = the weighted mean of src over the walk from i (stride `step`).
     let pass = |src: &[Vec3], out: &mut [Vec3], step: usize, fwd: &[u8], back: &[u8]| {
         let flat: &[f32] = bytemuck::cast_slice(src);
@@ -257,7 +274,11 @@ pub fn blur_n<const N: usize>(
                         continue;
                     }
                     let i = row + x;
-                    out_row[x] = if g.is_hit(i) {
+                    out_row[x] = if !g.is_hit(i) {
+                        src[i]
+                    } else if phases > 1 {
+                        balanced_walk(src, i, step, fwd[i], back[i], &weights, phases)
+                    } else {
                         let (mut sum, mut wsum) = (src[i] * weights[0], weights[0]);
                         // Positive direction, then negative.
                         for k in 1..=usize::from(fwd[i]) {
@@ -269,8 +290,6 @@ pub fn blur_n<const N: usize>(
                             wsum += weights[k];
                         }
                         sum / wsum
-                    } else {
-                        src[i]
                     };
                     x += 1;
                 }
@@ -282,6 +301,48 @@ pub fn blur_n<const N: usize>(
         pass(&scratch, img, w, &down, &up);
     }
     imgs
+}
+
+/// The largest interleaving the phase-balanced walk handles.
+const MAX_PHASES: usize = 16;
+
+/// The walk of a pixel whose walk a discontinuity cut short, averaged phase by phase: the
+/// taps at offsets k (from -`back` to `fwd`) with the same k mod `phases` come from the same
+/// sub-image; each phase's Gaussian-weighted mean counts once, over the phases the walk
+/// reaches. A plain weighted mean would let the sub-images near the pixel dominate, and
+/// along an edge the pixels would keep their own sub-image's light: a comb of streaks with
+/// the period of the interleaving.
+fn balanced_walk(
+    src: &[Vec3],
+    i: usize,
+    step: usize,
+    fwd: u8,
+    back: u8,
+    weights: &[f32],
+    phases: usize,
+) -> Vec3 {
+    let mut sum = [Vec3::ZERO; MAX_PHASES];
+    let mut wsum = [0.0f32; MAX_PHASES];
+    sum[0] = src[i] * weights[0];
+    wsum[0] = weights[0];
+    for k in 1..=usize::from(fwd) {
+        let ph = k % phases;
+        sum[ph] += src[i + k * step] * weights[k];
+        wsum[ph] += weights[k];
+    }
+    for k in 1..=usize::from(back) {
+        let ph = (phases - k % phases) % phases;
+        sum[ph] += src[i - k * step] * weights[k];
+        wsum[ph] += weights[k];
+    }
+    let (mut total, mut count) = (Vec3::ZERO, 0.0f32);
+    for ph in 0..phases {
+        if wsum[ph] > 0.0 {
+            total += sum[ph] / wsum[ph];
+            count += 1.0;
+        }
+    }
+    total / count
 }
 
 /// The blur of a run of consecutive pixels whose walks are all full (r steps both ways), on
@@ -325,14 +386,16 @@ pub fn recombine_n<const N: usize>(
 
 /// Steps of the blur's walk from every pixel along x (`vertical` false) or y, at most `r`:
 /// forwards and backwards. A step from i to j = i +- 1 pixel is allowed if j is in the image
-/// and sees a surface and, forwards, i is not a discontinuity pixel, backwards, j is not.
+/// and sees a surface and the pair has no jump along the axis (the bit of the pair's first
+/// pixel).
 /// Each run extends its neighbour's by one step, so one sweep per direction finds them all.
-fn runs(g: &GBuffer, disc: &[bool], r: usize, vertical: bool) -> (Vec<u8>, Vec<u8>) {
+fn runs(g: &GBuffer, disc: &[u8], r: usize, vertical: bool) -> (Vec<u8>, Vec<u8>) {
     let (w, h) = (g.width as usize, g.height as usize);
     let r = r.min(usize::from(u8::MAX)) as u8;
+    let bit = if vertical { JUMP_Y } else { JUMP_X };
     let (mut fwd, mut back) = (vec![0u8; w * h], vec![0u8; w * h]);
     let step = |from: usize, to: usize, from_run: u8| -> u8 {
-        if !disc[from.min(to)] && g.is_hit(to) {
+        if disc[from.min(to)] & bit == 0 && g.is_hit(to) {
             from_run.saturating_add(1).min(r)
         } else {
             0
@@ -443,6 +506,37 @@ mod tests {
         assert!(spread(&out[row..row + 10]) < 0.5 * spread(&img[row..row + 10]));
     }
 
+    /// A 4 x 4 interleaved image whose sub-images hold different constants, on two planes
+    /// with a vertical depth edge: after the blur every pixel, those along the edge too,
+    /// holds the mean of all sub-images within 2% (no comb along the edge: the walk along
+    /// the edge is not stopped by the jump across it, and walks cut short are averaged phase
+    /// by phase).
+    #[test]
+    fn every_sub_image_counts_along_an_edge() {
+        let (w, h, split, n) = (40u32, 24u32, 17u32, 4u32);
+        let g = two_planes(w, h, split);
+        let p = BlurParams {
+            phases: n,
+            ..BlurParams::defaults()
+        };
+        let disc = discontinuities(&g, &p);
+        let value = |s: usize| 1.0 + s as f32 * 0.37;
+        let img: Vec<Vec3> = (0..(w * h) as usize)
+            .map(|i| {
+                let (x, y) = (i as u32 % w, i as u32 / w);
+                Vec3::splat(value(sub_image_of(x, y, n)))
+            })
+            .collect();
+        let mean = (0..16).map(value).sum::<f32>() / 16.0;
+        let out = blur(&img, &g, &disc, &p);
+        for y in 0..h {
+            for x in [split - 1, split, 2, w - 3] {
+                let v = out[(y * w + x) as usize].x;
+                assert!((v - mean).abs() < 0.02 * mean, "({x}, {y}): {v} vs {mean}");
+            }
+        }
+    }
+
     #[test]
     fn lattices_cover_every_pixel_once() {
         let (w, h) = (13u32, 7u32);
@@ -462,7 +556,7 @@ mod tests {
     }
 
     /// The blur with precomputed walks equals a plain walk that tests every tap (bounds,
-    /// discontinuity on the side facing the step, pixel that sees nothing), bit for bit, on
+    /// a jump between the two pixels along the axis, pixel that sees nothing), bit for bit, on
     /// random discontinuity maps with holes, for 1 and 3 images at once.
     #[test]
     fn the_precomputed_walks_equal_a_plain_walk() {
@@ -475,7 +569,9 @@ mod tests {
                 g.depth[i] = f32::INFINITY;
             }
         }
-        let disc: Vec<bool> = (0..n).map(|_| rng.next_f32() < 0.08).collect();
+        let disc: Vec<u8> = (0..n)
+            .map(|_| u8::from(rng.next_f32() < 0.08) | (u8::from(rng.next_f32() < 0.08) << 1))
+            .collect();
         let img = |seed: u64| -> Vec<Vec3> {
             let mut r = lgh_core::rng::Rng::new(&[seed]);
             (0..n)
@@ -487,6 +583,7 @@ mod tests {
             .map(|k| (-((k * k) as f32) / (2.0 * p.sigma * p.sigma)).exp())
             .collect();
         let plain = |src: &[Vec3], step: usize, len: usize, pos: &dyn Fn(usize) -> usize| {
+            let bit = if step == 1 { JUMP_X } else { JUMP_Y };
             (0..n)
                 .map(|i| {
                     if !g.is_hit(i) {
@@ -502,7 +599,7 @@ mod tests {
                             }
                             let prev = j;
                             j = (j as isize + dir * step as isize) as usize;
-                            if (dir > 0 && disc[prev]) || (dir < 0 && disc[j]) || !g.is_hit(j) {
+                            if disc[prev.min(j)] & bit != 0 || !g.is_hit(j) {
                                 break;
                             }
                             sum += src[j] * wk;

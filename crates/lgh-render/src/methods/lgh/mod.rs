@@ -50,6 +50,7 @@ use crate::memory::FrameMemory;
 use crate::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
 use crate::passes::par_filled;
 use crate::settings::RenderError;
+use crate::shading::interleave::BlurParams;
 use crate::shading::ratio::{RatioFilter, shadowed_indirect};
 use crate::shading::reservoirs::{ReservoirLayout, ShadowReservoirs};
 use crate::shading::shadow_pass::ShadowPass;
@@ -270,7 +271,10 @@ pub fn render_lgh(
     let a: Vec<Vec3> = shaded.par_iter().map(|p| p.0).collect();
     let filter = RatioFilter {
         passes: all.shadows.passes(),
-        interleave_blur: (n > 1).then_some(all.tiling.blur),
+        interleave_blur: (n > 1).then_some(BlurParams {
+            phases: n,
+            ..all.tiling.blur
+        }),
     };
     let shadowed = shadowed_indirect(world, g, a, estimates, &filter, &mut t, &mut memory.filter);
     stats.shadow_rays = shadowed.rays;

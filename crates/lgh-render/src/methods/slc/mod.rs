@@ -36,6 +36,7 @@ use crate::memory::FrameMemory;
 use crate::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
 use crate::passes::par_filled;
 use crate::settings::{ErrorBound, RenderError};
+use crate::shading::interleave::BlurParams;
 use crate::shading::ratio::{RatioFilter, shadowed_indirect};
 use crate::shading::reservoirs::{ReservoirLayout, ShadowSample, offer};
 use crate::shading::shadow_pass::ShadowPass;
@@ -317,7 +318,10 @@ pub fn render_slc(
     let a: Vec<Vec3> = shaded.into_par_iter().map(|p| p.0).collect();
     let filter = RatioFilter {
         passes: all.shadows.passes(),
-        interleave_blur: (n > 1).then_some(all.tiling.blur),
+        interleave_blur: (n > 1).then_some(BlurParams {
+            phases: n,
+            ..all.tiling.blur
+        }),
     };
     let shadowed = shadowed_indirect(world, g, a, estimates, &filter, &mut t, &mut memory.filter);
     let stats = SlcStats {
