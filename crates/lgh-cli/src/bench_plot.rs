@@ -145,6 +145,8 @@ pub fn plot(path: &Path, scenes: &[String], points: &[Point]) -> Result<()> {
             if text {
                 mesh.x_desc("ms (VPL generation + indirect light)")
                     .y_desc(if row == 0 { "FLIP" } else { "rel_rmse" })
+                    .x_label_formatter(&|v| format!("{v:.0}"))
+                    .y_label_formatter(&|v| format!("{v:.3}"))
                     .label_style(("sans-serif", 12));
             } else {
                 mesh.disable_x_axis().disable_y_axis();

@@ -126,27 +126,37 @@ fn series(base: &RenderSettings) -> Vec<(&'static str, String, RenderSettings)> 
         out.push(("lgh alpha 2", format!("k={k}"), alpha2));
         out.push(("lgh 4x4", format!("k={k}"), il4));
     }
-    for eb in [0.01f32, 0.002, 0.0005] {
-        let slc = RenderSettings {
-            method: SLC,
-            error_bound: Some(eb),
-            ..base.clone()
-        };
-        out.push(("slc", format!("eb={eb}"), slc));
-    }
-    for eb in [0.5f32, 0.1, 0.02] {
-        let clamped = RenderSettings {
-            method: SLC_CLAMPED,
-            error_bound: Some(eb),
-            ..base.clone()
-        };
-        out.push(("slc-clamped", format!("eb={eb}"), clamped));
+    let bounds = [
+        ("slc", SLC, [0.01f32, 0.002, 0.0005]),
+        ("slc-clamped", SLC_CLAMPED, [0.5, 0.1, 0.02]),
+    ];
+    for (name, method, bounds) in bounds {
+        for eb in bounds {
+            let s = RenderSettings {
+                method,
+                error_bound: Some(eb),
+                ..base.clone()
+            };
+            out.push((name, format!("eb={eb}"), s));
+        }
     }
     out
 }
 
 fn render(world: &World, s: &RenderSettings) -> Result<Frame> {
     render_frame_with(world, s, &Silent, &mut FrameMemory::default()).map_err(|e| anyhow!("{e}"))
+}
+
+/// Settings for the indirect light alone at `size` with `vpls` VPLs.
+fn indirect_only(size: (u32, u32), vpls: usize) -> RenderSettings {
+    RenderSettings {
+        width: size.0,
+        height: size.1,
+        vpls,
+        area_samples: 0,
+        component: Component::Indirect,
+        ..RenderSettings::default()
+    }
 }
 
 /// The accumulation curve of one scene: lgh --accumulate N against brute --accumulate N.
@@ -159,14 +169,7 @@ fn accumulation(
     let Some(&max_n) = args.accumulate.iter().max() else {
         return Ok(Vec::new());
     };
-    let base = RenderSettings {
-        width: args.accumulate_size.0,
-        height: args.accumulate_size.1,
-        vpls: args.accumulate_vpls,
-        area_samples: 0,
-        component: Component::Indirect,
-        ..RenderSettings::default()
-    };
+    let base = indirect_only(args.accumulate_size, args.accumulate_vpls);
     let brute = RenderSettings {
         method: BRUTE,
         ..base.clone()
@@ -224,14 +227,7 @@ pub fn run(args: &QualityBenchArgs) -> Result<()> {
     for path in &scenes {
         let (name, world) = open_scene(Some(path))?;
         let exposure = world.scene.exposure;
-        let base = RenderSettings {
-            width: args.size.0,
-            height: args.size.1,
-            vpls: args.vpls,
-            area_samples: 0,
-            component: Component::Indirect,
-            ..RenderSettings::default()
-        };
+        let base = indirect_only(args.size, args.vpls);
         if !args.options.json {
             eprintln!("{name}: brute-force reference ({} VPLs)...", args.vpls);
         }

@@ -60,8 +60,14 @@ fn main() -> ExitCode {
     }
 }
 
+/// The most worker threads `--threads` takes.
+const MAX_THREADS: usize = 256;
+
 /// Sets the number of worker threads (0 = one per core).
 fn set_threads(threads: usize) -> anyhow::Result<usize> {
+    if threads > MAX_THREADS {
+        anyhow::bail!("--threads {threads}: at most {MAX_THREADS}");
+    }
     if threads > 0 {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

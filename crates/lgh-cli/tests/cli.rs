@@ -451,3 +451,51 @@ fn accumulate_and_bench_quality() {
     }
     assert!(std::fs::metadata(&plot).unwrap().len() > 1000);
 }
+
+/// Inputs that used to crash or hang: a glTF primitive naming an accessor that does not
+/// exist (a panic inside the glTF crate), a node that is its own child (an endless loop), a
+/// spot light whose inner angle exceeds its outer one, absurd thread and VPL counts.
+#[test]
+fn malformed_inputs_that_used_to_crash_are_refused() {
+    let d = temp_dir("hard");
+    let out_png = d.join("o.png");
+    let o = s(&out_png);
+    let w = |name: &str, text: &str| {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let accessor = w(
+        "accessor.gltf",
+        r#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":7}}]}]}"#,
+    );
+    assert_error(
+        &lgh(&["render", s(&accessor), "--out", o]),
+        &["accessor.gltf"],
+    );
+    let cycle = w(
+        "cycle.gltf",
+        r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"children":[1]},{"children":[0]}]}"#,
+    );
+    assert_error(
+        &lgh(&["render", s(&cycle), "--out", o]),
+        &["cycle.gltf", "node"],
+    );
+    w("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 3\n");
+    let spot = w(
+        "spot.toml",
+        "mesh = \"tri.obj\"\n[[lights]]\ntype = \"spot\"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\nintensity = [1, 1, 1]\ninner_angle = 40.0\nouter_angle = 30.0\n",
+    );
+    assert_error(
+        &lgh(&["render", s(&spot), "--out", o]),
+        &["spot.toml", "inner_angle <= outer_angle"],
+    );
+    assert_error(
+        &lgh(&["render", "--threads", "10000", "--out", o]),
+        &["--threads 10000"],
+    );
+    assert_error(
+        &lgh(&["render", "--vpls", "100000000", "--out", o]),
+        &["--vpls 100000000"],
+    );
+}

@@ -17,7 +17,7 @@ use crate::methods::slc::SlcSettings;
 use crate::methods::{Method, lgh};
 use crate::passes::vpl_gen::PathNumbers;
 use crate::shading::interleave::BlurParams;
-use crate::shading::ratio::MAX_SHADOW_SAMPLES;
+use crate::shading::ratio::{MAX_SHADOW_SAMPLES, RatioFilter};
 
 /// Which part of the radiance the output image holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
@@ -226,6 +226,9 @@ pub struct SettingsError {
     pub expected: String,
 }
 
+/// Most VPLs a frame: 2^24 (about 4 GB with their hierarchy).
+pub const MAX_VPLS: usize = 1 << 24;
+
 /// Largest image: 2^28 pixels (16384 x 16384).
 pub const MAX_PIXELS: u64 = 1 << 28;
 
@@ -253,6 +256,19 @@ impl RenderSettings {
         ErrorBound {
             epsilon_max: self.error_bound.unwrap_or(default),
             exposure: self.exposure_or(scene_exposure),
+        }
+    }
+
+    /// How the methods with the ratio estimator recombine and filter their shadow estimates
+    /// under n x n interleaving (`n` = 1: none).
+    #[must_use]
+    pub fn ratio_filter(&self, n: u32) -> RatioFilter {
+        RatioFilter {
+            passes: self.shadows.passes(),
+            interleave_blur: (n > 1).then_some(BlurParams {
+                phases: n,
+                ..self.tiling.blur
+            }),
         }
     }
 
@@ -295,6 +311,13 @@ impl RenderSettings {
         }
         if let Some(e) = self.error_bound {
             positive("error-bound", e)?;
+        }
+        if self.vpls > MAX_VPLS {
+            return err(
+                "vpls",
+                &self.vpls,
+                &format!("at most {MAX_VPLS} (each VPL needs about 250 bytes with its hierarchy)"),
+            );
         }
         positive("alpha", self.lgh.alpha)?;
         positive("clamp-fraction", self.clamp_fraction)?;

@@ -24,6 +24,30 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     if !path.is_file() {
         return Err(SceneError::new(path, "file not found"));
     }
+    contain_panics(path, || load_checked(path))
+}
+
+/// Runs `f`, turning a panic inside it (a bug of the glTF crate on a malformed file, which it
+/// does not validate everywhere) into an error naming the file. The panic message is kept
+/// off stderr while `f` runs, so that the user sees one line.
+fn contain_panics(
+    path: &Path,
+    f: impl FnOnce() -> Result<Scene, SceneError>,
+) -> Result<Scene, SceneError> {
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    std::panic::set_hook(hook);
+    result.unwrap_or_else(|_| {
+        Err(SceneError::new(
+            path,
+            "malformed glTF: the loader failed on it (an accessor, buffer or index out of range?)",
+        ))
+    })
+}
+
+/// [`load`] of a file that exists.
+fn load_checked(path: &Path) -> Result<Scene, SceneError> {
     let (doc, buffers, images) =
         gltf::import(path).map_err(|e| SceneError::new(path, format!("cannot load glTF: {e}")))?;
     let mut scene = Scene::new(file_stem(path));
@@ -69,7 +93,25 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         .ok_or_else(|| SceneError::new(path, "the glTF file has no scene"))?;
     let mut stack: Vec<(gltf::Node, Mat4)> = gscene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     let mut skipped_modes = 0usize;
+    // glTF nodes form strict trees: a node met twice has two parents or is its own ancestor
+    // (a cycle, which would never end).
+    let mut seen = vec![false; doc.nodes().len()];
     while let Some((node, parent)) = stack.pop() {
+        let Some(visited) = seen.get_mut(node.index()) else {
+            return Err(SceneError::new(
+                path,
+                format!("node {} does not exist", node.index()),
+            ));
+        };
+        if std::mem::replace(visited, true) {
+            return Err(SceneError::new(
+                path,
+                format!(
+                    "node {} has two parents or is its own ancestor (glTF nodes form trees)",
+                    node.index()
+                ),
+            ));
+        }
         let m = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if let Some(mesh) = node.mesh() {
             let object = node

@@ -302,6 +302,23 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             fov_y_degrees: c.fov,
         });
     }
+    for (k, light) in desc.lights.iter().enumerate() {
+        if let LightDesc::Spot {
+            inner_angle,
+            outer_angle,
+            ..
+        } = *light
+            && !(0.0 <= inner_angle && inner_angle <= outer_angle && outer_angle <= 180.0)
+        {
+            return Err(SceneError::new(
+                path,
+                format!(
+                    "light {}: a spot light needs 0 <= inner_angle <= outer_angle <= 180 (got {inner_angle} and {outer_angle})",
+                    k + 1
+                ),
+            ));
+        }
+    }
     let first_file_light = scene.lights.len();
     scene
         .lights

@@ -50,8 +50,7 @@ use crate::memory::FrameMemory;
 use crate::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
 use crate::passes::par_filled;
 use crate::settings::RenderError;
-use crate::shading::interleave::BlurParams;
-use crate::shading::ratio::{RatioFilter, shadowed_indirect};
+use crate::shading::ratio::shadowed_indirect;
 use crate::shading::reservoirs::{ReservoirLayout, ShadowReservoirs};
 use crate::shading::shadow_pass::ShadowPass;
 use crate::shading::tiles::InterleavedBins;
@@ -269,13 +268,7 @@ pub fn render_lgh(
         t.push("shadow_rays", times.rays_ms);
     }
     let a: Vec<Vec3> = shaded.par_iter().map(|p| p.0).collect();
-    let filter = RatioFilter {
-        passes: all.shadows.passes(),
-        interleave_blur: (n > 1).then_some(BlurParams {
-            phases: n,
-            ..all.tiling.blur
-        }),
-    };
+    let filter = all.ratio_filter(n);
     let shadowed = shadowed_indirect(world, g, a, estimates, &filter, &mut t, &mut memory.filter);
     stats.shadow_rays = shadowed.rays;
     Ok(MethodOutput {

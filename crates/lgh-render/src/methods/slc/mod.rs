@@ -36,8 +36,7 @@ use crate::memory::FrameMemory;
 use crate::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
 use crate::passes::par_filled;
 use crate::settings::{ErrorBound, RenderError};
-use crate::shading::interleave::BlurParams;
-use crate::shading::ratio::{RatioFilter, shadowed_indirect};
+use crate::shading::ratio::shadowed_indirect;
 use crate::shading::reservoirs::{ReservoirLayout, ShadowSample, offer};
 use crate::shading::shadow_pass::ShadowPass;
 use crate::shading::tiles::InterleavedBins;
@@ -316,13 +315,7 @@ pub fn render_slc(
     }
     let lights_per_pixel: Vec<u32> = shaded.par_iter().map(|p| p.1).collect();
     let a: Vec<Vec3> = shaded.into_par_iter().map(|p| p.0).collect();
-    let filter = RatioFilter {
-        passes: all.shadows.passes(),
-        interleave_blur: (n > 1).then_some(BlurParams {
-            phases: n,
-            ..all.tiling.blur
-        }),
-    };
+    let filter = all.ratio_filter(n);
     let shadowed = shadowed_indirect(world, g, a, estimates, &filter, &mut t, &mut memory.filter);
     let stats = SlcStats {
         avg_lights_per_pixel: g.mean_over_hits(&lights_per_pixel),
