@@ -210,12 +210,20 @@ pub fn area_samples(
     }
 }
 
-/// The unshadowed irradiance at `x` (normal `n`) of the emitters marked in `analytic`, in
-/// closed form: L_j times the projected solid angle of each triangle that faces x.
+/// The indices of the emitters marked in `analytic` (found once per frame, so that the
+/// per-pixel closed form visits only them).
 #[must_use]
-pub fn analytic_irradiance(lights: &LightSet, analytic: &[bool], x: Vec3, n: Vec3) -> Vec3 {
+pub fn analytic_indices(analytic: &[bool]) -> Vec<usize> {
+    (0..analytic.len()).filter(|&j| analytic[j]).collect()
+}
+
+/// The unshadowed irradiance at `x` (normal `n`) of the emitters `indices`
+/// ([`analytic_indices`]), in closed form: L_j times the projected solid angle of each
+/// triangle that faces x.
+#[must_use]
+pub fn analytic_irradiance(lights: &LightSet, indices: &[usize], x: Vec3, n: Vec3) -> Vec3 {
     let mut e = Vec3::ZERO;
-    for (em, _) in lights.emitters.iter().zip(analytic).filter(|(_, a)| **a) {
+    for em in indices.iter().filter_map(|&j| lights.emitters.get(j)) {
         // One-sided: the front is the counter-clockwise normal.
         if em.normal.dot(x - em.v0) <= 0.0 {
             continue;
@@ -313,7 +321,8 @@ pub fn render_direct(
         DirectMode::Analytic if area_samples_per_pixel > 0 => analytic_emitters(&world.lights),
         _ => Vec::new(),
     };
-    let any_analytic = analytic.iter().any(|&a| a);
+    let indices = analytic_indices(&analytic);
+    let any_analytic = !indices.is_empty();
     progress.begin("direct", u64::from(g.height));
     let w = g.width as usize;
     let points = frame_points(seed, area_samples_per_pixel);
@@ -335,7 +344,7 @@ pub fn render_direct(
                     *out = PixelDirect {
                         base: punctual_irradiance(world, p, n, ng) + a.rest,
                         analytic: if any_analytic {
-                            analytic_irradiance(&world.lights, &analytic, p, n)
+                            analytic_irradiance(&world.lights, &indices, p, n)
                         } else {
                             Vec3::ZERO
                         },

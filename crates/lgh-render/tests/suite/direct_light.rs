@@ -5,7 +5,7 @@ use std::f32::consts::FRAC_1_PI;
 use std::path::Path;
 
 use glam::Vec3;
-use lgh_render::direct::{DirectMode, analytic_emitters, analytic_irradiance};
+use lgh_render::direct::{DirectMode, analytic_emitters, analytic_indices, analytic_irradiance};
 use lgh_render::image::metrics::diff;
 use lgh_render::{Component, Frame, RenderSettings, World};
 use lgh_scene::Material;
@@ -55,7 +55,7 @@ fn without_occluders_the_analytic_estimator_is_exact() {
     let world = World::new(scene);
     assert_eq!(world.lights.emitters.len(), 2);
     let f = direct(&world, DirectMode::Analytic, 8, 3, (48, 32));
-    let analytic = analytic_emitters(&world.lights);
+    let analytic = analytic_indices(&analytic_emitters(&world.lights));
     let g = &f.gbuffer;
     let mut lit = 0;
     for i in 0..g.len() {
