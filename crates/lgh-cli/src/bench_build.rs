@@ -50,22 +50,6 @@ struct Input {
     intensity: Vec<Vec3>,
 }
 
-/// Peak resident memory since the last reset, in bytes (Linux; `None` elsewhere).
-fn peak_rss_reset() -> Option<u64> {
-    if std::env::var_os("LGH_NO_RSS").is_some() {
-        return None;
-    }
-    std::fs::write("/proc/self/clear_refs", "5").ok()?;
-    rss("VmRSS:")
-}
-
-fn rss(key: &str) -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with(key))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
 pub fn run(args: &BuildArgs) -> Result<()> {
     let threads = args.options.threads()?;
     let levels = args.levels;
@@ -112,9 +96,9 @@ pub fn run(args: &BuildArgs) -> Result<()> {
             // One builder across runs, as a renderer keeps it across frames; the first (cold)
             // run is not timed, and gives the peak working memory.
             let mut builder = GridBuilder::default();
-            let base = peak_rss_reset();
+            let base = crate::sysmem::reset_peak();
             builder.build(&lights, levels, construction)?;
-            let peak = match (base, rss("VmHWM:")) {
+            let peak = match (base, crate::sysmem::peak_bytes()) {
                 (Some(b), Some(p)) => p.saturating_sub(b),
                 _ => 0,
             };

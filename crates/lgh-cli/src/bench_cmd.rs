@@ -60,24 +60,30 @@ pub struct BenchArgs {
 pub enum BenchWhat {
     /// Rays per second on a scene: primary, shadow (any-hit) and bounce (closest-hit) rays,
     /// with the BVH build time.
+    #[command(allow_negative_numbers = true)]
     Rays(RaysArgs),
     /// Lighting grid hierarchy construction (LGH paper Table 1): per-step times, levels and
     /// lights per level, for the paper's gather-from-S1 method and the all-scatter variant.
+    #[command(allow_negative_numbers = true)]
     Build(BuildArgs),
     /// LGH rendering (LGH paper Tables 2 and 3): VPL generation, hierarchy construction, and
     /// render times without shadows, with 1 and with 4 shadow samples, with the per-pass
     /// breakdown.
+    #[command(allow_negative_numbers = true)]
     Render(crate::bench_render::RenderBenchArgs),
     /// Stochastic light culling (Tokuyoshi & Harada 2016): slc, slc-clamped and LGH against
     /// the brute force at 16K-262K VPLs (time, lights per pixel, error; clamped also at equal
     /// time), and the area-light path tracer against uniform light sampling at equal time.
+    #[command(allow_negative_numbers = true)]
     Slc(crate::bench_slc::SlcBenchArgs),
     /// Image quality against time (equal VPLs): every method at several settings against the
     /// exact brute force on each scene (rel_rmse, FLIP, bias, time), the convergence of
     /// `--accumulate`, and a log-log plot of error against time.
+    #[command(allow_negative_numbers = true)]
     Quality(crate::bench_quality::QualityBenchArgs),
     /// Flicker of a static view with VPLs regenerated every frame, without and with temporal
     /// filtering (LGH paper 4.3), and the time per frame.
+    #[command(allow_negative_numbers = true)]
     Temporal(crate::bench_temporal::TemporalBenchArgs),
 }
 

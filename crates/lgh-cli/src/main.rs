@@ -19,6 +19,7 @@ mod heatmap;
 mod progress_bar;
 mod render_cmd;
 mod scene_arg;
+mod sysmem;
 
 use std::process::ExitCode;
 
@@ -37,10 +38,13 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Render a scene (the built-in Cornell box if none is given) to PNG or EXR.
-    Render(render_cmd::RenderArgs),
+    // Negative numbers are values, so that `--alpha -1` gets "must be a positive number".
+    #[command(allow_negative_numbers = true)]
+    Render(Box<render_cmd::RenderArgs>),
     /// Compare image A against reference B (EXR or PNG, same size).
     Diff(diff_cmd::DiffArgs),
     /// Measure performance.
+    #[command(allow_negative_numbers = true)]
     Bench(bench_cmd::BenchArgs),
 }
 

@@ -17,6 +17,7 @@
 //! | [`sequence`] | frame sequences with temporal filtering; flicker |
 //! | [`accumulate`] | progressive rendering: the mean of N frames with independent VPL sets |
 //! | [`memory`] | working memory frames reuse |
+//! | [`budget`] | the memory a render needs, estimated before it allocates |
 //! | [`image`] | EXR/PNG files, tone mapping, image metrics |
 //! | [`progress`], [`raybench`] | progress reporting; ray throughput |
 //!
@@ -53,6 +54,7 @@
 )]
 
 pub mod accumulate;
+pub mod budget;
 pub mod denoise;
 pub mod direct;
 pub mod frame;

@@ -14,7 +14,7 @@ use crate::direct::DirectMode;
 use crate::methods::lgh::LghSettings;
 use crate::methods::pt::PtSettings;
 use crate::methods::slc::SlcSettings;
-use crate::methods::{Method, lgh};
+use crate::methods::{Illumination, Method, lgh};
 use crate::passes::vpl_gen::PathNumbers;
 use crate::shading::interleave::BlurParams;
 use crate::shading::ratio::{MAX_SHADOW_SAMPLES, RatioFilter};
@@ -243,6 +243,22 @@ pub struct ErrorBound {
 }
 
 impl RenderSettings {
+    /// Settings that are valid but probably not what was meant, one line each (the image
+    /// of a VPL method with no VPLs has no indirect light).
+    #[must_use]
+    pub fn warnings(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.method.illumination() == Illumination::FromVpls {
+            if self.vpls == 0 {
+                out.push("--vpls 0: no VPLs, so the image has no indirect light".to_string());
+            }
+            if self.bounces == 0 {
+                out.push("--bounces 0: no VPLs, so the image has no indirect light".to_string());
+            }
+        }
+        out
+    }
+
     /// The exposure E: [`RenderSettings::exposure`], else the scene's.
     #[must_use]
     pub fn exposure_or(&self, scene_exposure: f32) -> f32 {
@@ -316,7 +332,10 @@ impl RenderSettings {
             return err(
                 "vpls",
                 &self.vpls,
-                &format!("at most {MAX_VPLS} (each VPL needs about 250 bytes with its hierarchy)"),
+                &format!(
+                    "at most {MAX_VPLS} (each VPL needs up to {} bytes with its hierarchy)",
+                    crate::budget::BYTES_PER_VPL
+                ),
             );
         }
         positive("alpha", self.lgh.alpha)?;

@@ -11,6 +11,7 @@ use std::path::Path;
 
 use glam::{Mat4, Vec2, Vec3};
 
+use crate::error::contain_panics;
 use crate::mesh::Primitive;
 use crate::obj::file_stem;
 use crate::{Camera, Light, Material, Scene, SceneError, Texture};
@@ -24,34 +25,27 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     if !path.is_file() {
         return Err(SceneError::new(path, "file not found"));
     }
-    contain_panics(path, || load_checked(path))
-}
-
-/// Runs `f`, turning a panic inside it (a bug of the glTF crate on a malformed file, which it
-/// does not validate everywhere) into an error naming the file. The panic message is kept
-/// off stderr while `f` runs, so that the user sees one line.
-fn contain_panics(
-    path: &Path,
-    f: impl FnOnce() -> Result<Scene, SceneError>,
-) -> Result<Scene, SceneError> {
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
-    std::panic::set_hook(hook);
-    result.unwrap_or_else(|_| {
-        Err(SceneError::new(
-            path,
-            "malformed glTF: the loader failed on it (an accessor, buffer or index out of range?)",
-        ))
-    })
+    contain_panics(path, "glTF", || load_checked(path))
 }
 
 /// [`load`] of a file that exists.
 fn load_checked(path: &Path) -> Result<Scene, SceneError> {
-    let (doc, buffers, images) =
-        gltf::import(path).map_err(|e| SceneError::new(path, format!("cannot load glTF: {e}")))?;
+    let (doc, buffers, images) = gltf::import(path).map_err(|e| {
+        let message = match old_version(path) {
+            Some(v) => format!("glTF {v} is not supported (lgh reads glTF 2.0)"),
+            None => format!("cannot load glTF: {e}"),
+        };
+        SceneError::new(path, message)
+    })?;
     let mut scene = Scene::new(file_stem(path));
 
+    for ext in doc.extensions_used() {
+        if ext == "KHR_materials_transmission" || ext == "KHR_materials_volume" {
+            scene.report.warnings.push(format!(
+                "the file uses {ext} (glass); lgh renders those surfaces opaque and diffuse"
+            ));
+        }
+    }
     let mut texture_of_image = vec![None; images.len()];
     for (i, img) in images.iter().enumerate() {
         texture_of_image[i] = convert_image(img).map(|t| {
@@ -118,10 +112,16 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
                 .name()
                 .map_or_else(|| format!("node{}", node.index()), str::to_string);
             for p in mesh.primitives() {
-                if p.mode() != gltf::mesh::Mode::Triangles {
+                let Some(indices) = triangle_list(&p, &buffers).map_err(|e| {
+                    SceneError::new(
+                        path,
+                        format!("mesh {} primitive {}: {e}", mesh.index(), p.index()),
+                    )
+                })?
+                else {
                     skipped_modes += 1;
                     continue;
-                }
+                };
                 let reader = p.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
                 let positions: Vec<Vec3> = match reader.read_positions() {
                     Some(it) => it.map(Vec3::from_array).collect(),
@@ -135,16 +135,12 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
                     .read_tex_coords(0)
                     .map(|it| it.into_f32().map(|[u, v]| Vec2::new(u, 1.0 - v)).collect())
                     .unwrap_or_default();
-                let flat: Vec<u32> = match reader.read_indices() {
-                    Some(it) => it.into_u32().collect(),
-                    None => (0..positions.len() as u32).collect(),
-                };
                 let material = p.material().index().map_or(default_material, |i| i as u32);
                 let prim = Primitive {
                     positions,
                     normals,
                     uvs,
-                    indices: flat.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+                    indices,
                     material,
                 };
                 scene.mesh.append(&prim, m, &object);
@@ -174,6 +170,136 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
         ));
     }
     Ok(scene)
+}
+
+/// The version of a glTF file older than 2.0 (`"1.0"`; the GLB header's version for `.glb`),
+/// to explain why it does not load.
+fn old_version(path: &Path) -> Option<String> {
+    let bytes = std::fs::read(path).ok()?;
+    if let Some(header) = bytes.strip_prefix(b"glTF") {
+        let v = u32::from_le_bytes(header.get(..4)?.try_into().ok()?);
+        return (v < 2).then(|| format!("{v}.0"));
+    }
+    let json: gltf::json::Value = gltf::json::deserialize::from_slice(&bytes).ok()?;
+    let v = json.get("asset").and_then(|a| a.get("version"));
+    let v = match v {
+        Some(gltf::json::Value::String(s)) => s.clone(),
+        // glTF 1.0 files often have no asset.version, and "version" where 2.0 has lists.
+        None => "1.0".to_string(),
+        Some(other) => other.to_string(),
+    };
+    (!v.starts_with('2')).then_some(v)
+}
+
+/// The triangles of primitive `p` as index triples, after checking every accessor it reads
+/// against its buffer (the `gltf` crate's reader trusts counts and offsets, and would read out
+/// of bounds or allocate for a count no buffer holds): `Ok(None)` for points and lines.
+/// Triangle strips and fans are unrolled to lists.
+fn triangle_list(
+    p: &gltf::Primitive,
+    buffers: &[gltf::buffer::Data],
+) -> Result<Option<Vec<[u32; 3]>>, String> {
+    use gltf::mesh::{Mode, Semantic};
+    let mode = p.mode();
+    if !matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    ) {
+        return Ok(None);
+    }
+    let Some(position) = p.get(&Semantic::Positions) else {
+        return Err("no POSITION attribute".into());
+    };
+    check_accessor(&position, buffers)?;
+    for semantic in [Semantic::Normals, Semantic::TexCoords(0)] {
+        if let Some(a) = p.get(&semantic) {
+            check_accessor(&a, buffers)?;
+            if a.count() != position.count() {
+                return Err(format!(
+                    "accessor {} ({semantic:?}) has {} elements for {} vertices",
+                    a.index(),
+                    a.count(),
+                    position.count()
+                ));
+            }
+        }
+    }
+    let vertices = position.count();
+    let flat: Vec<u32> = match p.indices() {
+        Some(a) => {
+            check_accessor(&a, buffers)?;
+            let reader = p.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let flat: Vec<u32> = reader
+                .read_indices()
+                .map(|it| it.into_u32().collect())
+                .unwrap_or_default();
+            if let Some(&i) = flat.iter().find(|&&i| i as usize >= vertices) {
+                return Err(format!(
+                    "accessor {}: index {i} out of range ({vertices} vertices)",
+                    a.index()
+                ));
+            }
+            flat
+        }
+        None => (0..u32::try_from(vertices).map_err(|_| "too many vertices")?).collect(),
+    };
+    let triangles = match mode {
+        Mode::TriangleStrip => (2..flat.len())
+            .map(|i| {
+                // Every second triangle of a strip is flipped to keep the winding.
+                if i % 2 == 0 {
+                    [flat[i - 2], flat[i - 1], flat[i]]
+                } else {
+                    [flat[i - 1], flat[i - 2], flat[i]]
+                }
+            })
+            .collect(),
+        Mode::TriangleFan => (2..flat.len())
+            .map(|i| [flat[0], flat[i - 1], flat[i]])
+            .collect(),
+        _ => flat.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+    };
+    Ok(Some(triangles))
+}
+
+/// Checks that accessor `a` lies inside its buffer view and the view inside its buffer's
+/// data, so that reading it stays in bounds and its count is backed by real bytes.
+fn check_accessor(a: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<(), String> {
+    let name = format!("accessor {}", a.index());
+    if a.sparse().is_some() {
+        return Err(format!("{name} is sparse (not supported)"));
+    }
+    let Some(view) = a.view() else {
+        return Err(format!("{name} has no buffer view"));
+    };
+    let data = buffers.get(view.buffer().index()).map_or(0, |d| d.0.len());
+    let view_end = view.offset().checked_add(view.length());
+    if view_end.is_none_or(|end| end > data) {
+        return Err(format!(
+            "buffer view {} (bytes {}..{}) does not fit its buffer of {data} bytes",
+            view.index(),
+            view.offset(),
+            view.offset().saturating_add(view.length())
+        ));
+    }
+    if a.count() == 0 {
+        return Ok(());
+    }
+    let stride = view.stride().unwrap_or(a.size()).max(a.size());
+    let needed = (a.count() - 1)
+        .checked_mul(stride)
+        .and_then(|n| n.checked_add(a.size()))
+        .and_then(|n| n.checked_add(a.offset()));
+    if needed.is_none_or(|n| n > view.length()) {
+        return Err(format!(
+            "{name} has {} elements of {} bytes, more than its buffer view {} holds ({} bytes)",
+            a.count(),
+            a.size(),
+            view.index(),
+            view.length()
+        ));
+    }
+    Ok(())
 }
 
 /// A `KHR_lights_punctual` light placed by the node transform `m` (lights look along -z).

@@ -47,17 +47,18 @@ use std::path::Path;
 /// Loads a scene from a file, chosen by extension: `.toml` (scene file), `.gltf`/`.glb`, `.obj`.
 ///
 /// A mesh file loaded directly gets its own lights (emissive materials, glTF punctual lights)
-/// and camera, or a default camera that frames the whole mesh.
+/// and camera, or a default camera that frames the whole mesh and, if it has no light, a
+/// point light at the camera ([`Scene::finish_mesh_file`], with a warning).
 ///
 /// # Errors
 /// A [`SceneError`] naming the file and the problem: unreadable file, parse error, unknown
-/// extension, non-finite vertices, no triangles, no lights.
+/// extension, non-finite vertices, no triangles, no lights (scene files).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     if has_extension(path, &["toml"]) {
         return scene_file::load(path);
     }
     let mut scene = load_mesh_file(path)?;
-    scene.finish(path)?;
+    scene.finish_mesh_file(path)?;
     Ok(scene)
 }
 

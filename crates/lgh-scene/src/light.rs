@@ -64,6 +64,17 @@ impl Light {
         }
     }
 
+    /// True if the light emits something (a light of zero power adds nothing to the image).
+    #[must_use]
+    pub fn emits(&self) -> bool {
+        match *self {
+            Light::Point { intensity, .. } | Light::Spot { intensity, .. } => {
+                intensity.max_element() > 0.0
+            }
+            Light::Directional { irradiance, .. } => irradiance.max_element() > 0.0,
+        }
+    }
+
     /// True if every number of the light is finite and its direction (if any) has length.
     #[must_use]
     pub fn is_valid(&self) -> bool {

@@ -4,10 +4,13 @@
 //! MTL file), `Ke` the emitted radiance. A missing MTL file or texture is a warning, not an
 //! error: the geometry still renders with default materials.
 
+use std::cell::RefCell;
+use std::io::BufReader;
 use std::path::Path;
 
 use glam::{Mat4, Vec2, Vec3};
 
+use crate::error::contain_panics;
 use crate::mesh::Primitive;
 use crate::{Material, Scene, SceneError, Texture};
 
@@ -26,20 +29,36 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, materials) = tobj::load_obj(path, &opts)
-        .map_err(|e| SceneError::new(path, format!("cannot parse OBJ: {e}")))?;
-    let mut scene = Scene::new(file_stem(path));
     let dir = path.parent().unwrap_or(Path::new("."));
+    let file = std::fs::File::open(path)
+        .map_err(|e| SceneError::new(path, format!("cannot read OBJ: {e}")))?;
+    let mtl_problem = RefCell::new(None);
+    let (models, materials) = contain_panics(path, "OBJ/MTL", || {
+        tobj::load_obj_buf(&mut BufReader::new(file), &opts, |name| {
+            load_mtl(&dir.join(name), &mtl_problem)
+        })
+        .map_err(|e| SceneError::new(path, format!("cannot parse OBJ: {e}")))
+    })?;
+    let mut scene = Scene::new(file_stem(path));
     let obj_materials = match materials {
         Ok(m) => m,
         Err(e) => {
+            let why = mtl_problem.into_inner().unwrap_or_else(|| e.to_string());
             scene.report.warnings.push(format!(
-                "material library not loaded ({e}); using a grey default"
+                "material library not loaded ({why}); using a grey default"
             ));
             Vec::new()
         }
     };
     for m in &obj_materials {
+        if let Some(illum) = m.illumination_model.filter(|i| (3..=9).contains(i)) {
+            let kd = m.diffuse.unwrap_or([0.8; 3]);
+            scene.report.warnings.push(format!(
+                "material '{}' is a mirror or glass (illum {illum}); lgh renders diffuse \
+                 surfaces only, so it shows its Kd ({} {} {})",
+                m.name, kd[0], kd[1], kd[2]
+            ));
+        }
         let albedo_texture = m
             .diffuse_texture
             .as_deref()
@@ -91,6 +110,29 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         scene.materials.push(Material::default());
     }
     Ok(scene)
+}
+
+/// Reads an MTL file for `tobj`, first checking what its parser would panic on (a colour
+/// with fewer than three numbers); the problem, named by file and line, goes to `problem`.
+fn load_mtl(path: &Path, problem: &RefCell<Option<String>>) -> tobj::MTLLoadResult {
+    let Ok(text) = std::fs::read_to_string(path) else {
+        *problem.borrow_mut() = Some(format!("{}: cannot read", path.display()));
+        return Err(tobj::LoadError::OpenFileFailed);
+    };
+    for (i, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke")) = words.next()
+            && words.count() < 3
+        {
+            *problem.borrow_mut() = Some(format!(
+                "{} line {}: {key} needs three numbers",
+                path.display(),
+                i + 1
+            ));
+            return Err(tobj::LoadError::MaterialParseError);
+        }
+    }
+    tobj::load_mtl_buf(&mut text.as_bytes())
 }
 
 /// Loads an 8-bit image file as an sRGB texture; on failure records a warning and returns

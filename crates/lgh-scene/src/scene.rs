@@ -65,6 +65,19 @@ impl Scene {
     /// # Errors
     /// A [`SceneError`] naming `path` and the problem.
     pub fn finish(&mut self, path: &Path) -> Result<(), SceneError> {
+        self.finish_with(path, false)
+    }
+
+    /// [`Scene::finish`] for a mesh file loaded on its own: if it has no light, a point light
+    /// is added at the camera (with a warning) instead of failing.
+    ///
+    /// # Errors
+    /// As [`Scene::finish`], but for missing lights.
+    pub fn finish_mesh_file(&mut self, path: &Path) -> Result<(), SceneError> {
+        self.finish_with(path, true)
+    }
+
+    fn finish_with(&mut self, path: &Path, default_light: bool) -> Result<(), SceneError> {
         if let Some(i) = self.mesh.triangles.iter().flatten().find(|&&i| {
             self.mesh
                 .positions
@@ -104,13 +117,29 @@ impl Scene {
                 },
             ));
         }
+        if default_light {
+            self.add_default_light();
+        }
         if let Some(l) = self.lights.iter().find(|l| !l.is_valid()) {
             return Err(SceneError::new(
                 path,
                 format!("invalid light (non-finite or negative value, or zero direction): {l:?}"),
             ));
         }
-        if self.lights.is_empty() && self.emissive_triangles().is_empty() {
+        for (i, l) in self.lights.iter().enumerate() {
+            if !l.emits() {
+                self.report.warnings.push(format!(
+                    "light {i} has zero power: it adds nothing to the image"
+                ));
+            }
+        }
+        let emitters = self.emissive_triangles().len();
+        if emitters == 0 && !self.lights.is_empty() && !self.lights.iter().any(Light::emits) {
+            self.report
+                .warnings
+                .push("no light emits anything: the image will be black".to_string());
+        }
+        if self.lights.is_empty() && emitters == 0 {
             return Err(SceneError::new(
                 path,
                 "the scene has no lights: add [[lights]] to a scene file, or give a material an emission",
@@ -130,6 +159,32 @@ impl Scene {
             None => self.camera = Some(self.framing_camera()),
         }
         Ok(())
+    }
+
+    /// Adds a point light for a mesh file that brings none (most model files have no
+    /// lights), with a warning: it sits at the camera, raised by a quarter of the scene's
+    /// radius so that shadows show, with an intensity that gives an irradiance of 2 W/m^2 at
+    /// the scene's centre. Does nothing if the scene has a light or an emissive material.
+    fn add_default_light(&mut self) {
+        if !self.lights.is_empty() || !self.emissive_triangles().is_empty() || self.mesh.is_empty()
+        {
+            return;
+        }
+        let camera = Some(self.camera())
+            .filter(Camera::is_valid)
+            .unwrap_or_else(|| self.framing_camera());
+        let (centre, radius) = self.bounding_sphere();
+        let up = camera.up.normalize_or_zero();
+        let position = camera.position + 0.25 * radius * up;
+        let d2 = position.distance_squared(centre).max(1e-12);
+        self.lights.push(Light::Point {
+            position,
+            intensity: Vec3::splat(2.0 * d2),
+        });
+        self.report.warnings.push(
+            "the scene has no lights: added a point light at the camera (a scene file sets lights with [[lights]])"
+                .to_string(),
+        );
     }
 
     /// A camera on the +z side of the bounds looking at their centre, far enough back that the

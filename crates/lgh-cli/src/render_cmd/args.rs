@@ -17,7 +17,7 @@ pub struct RenderArgs {
     /// for the pt methods).
     pub scene: Option<PathBuf>,
     /// Image size, WIDTHxHEIGHT.
-    #[arg(long, default_value = "640x360", value_parser = parse_size)]
+    #[arg(long, default_value = "640x360", value_parser = parse_size, allow_hyphen_values = true)]
     pub size: (u32, u32),
     /// Output image: .png (exposure, ACES filmic tone map, sRGB) or .exr (linear radiance).
     #[arg(long, short, default_value = "lgh.png")]
@@ -52,6 +52,10 @@ pub struct RenderArgs {
     /// The temporal filter.
     #[command(flatten)]
     pub temporal: TemporalSettings,
+    /// Refuse renders estimated to need more memory than this (e.g. 8G, 512MB, 2GiB).
+    /// Default: the memory the system has available.
+    #[arg(long, value_parser = lgh_render::budget::parse_bytes)]
+    pub max_memory: Option<u64>,
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
@@ -72,6 +76,9 @@ impl RenderArgs {
     }
 }
 
+/// The longest sequence `--frames` takes.
+pub const MAX_FRAMES: u32 = 1_000_000;
+
 /// Parses `A..B` (frames A to B - 1).
 pub fn parse_frames(s: &str) -> Result<(u32, u32), String> {
     let (a, b) = s
@@ -87,6 +94,9 @@ pub fn parse_frames(s: &str) -> Result<(u32, u32), String> {
         .map_err(|_| format!("'{s}': B is not a number"))?;
     if b <= a {
         return Err(format!("'{s}': B must be larger than A"));
+    }
+    if b - a > MAX_FRAMES {
+        return Err(format!("'{s}': at most {MAX_FRAMES} frames"));
     }
     Ok((a, b))
 }
@@ -124,7 +134,10 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
         return Err(format!("'{s}': width and height must be at least 1"));
     }
     if u64::from(w) * u64::from(h) > lgh_render::settings::MAX_PIXELS {
-        return Err(format!("'{s}': image too large"));
+        return Err(format!(
+            "'{s}': image too large (at most {} pixels)",
+            lgh_render::settings::MAX_PIXELS
+        ));
     }
     Ok((w, h))
 }
@@ -145,6 +158,7 @@ mod tests {
     fn frames_and_their_paths() {
         assert_eq!(parse_frames("0..48"), Ok((0, 48)));
         assert!(parse_frames("5..5").is_err());
+        assert!(parse_frames("0..4000000000").is_err());
         let p = frame_path(std::path::Path::new("out/f_####.png"), 7);
         assert_eq!(p, std::path::PathBuf::from("out/f_0007.png"));
     }

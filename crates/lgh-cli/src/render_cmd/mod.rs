@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use anyhow::{Result, bail};
 use lgh_render::accumulate::render_accumulated;
+use lgh_render::budget::MemoryEstimate;
 use lgh_render::image::check_output_path;
 use lgh_render::sequence::Sequence;
 use lgh_render::{FrameMemory, RenderSettings, World, render_frame};
@@ -101,10 +102,20 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     check_args(args)?;
     let settings = args.render_settings();
     settings.validate()?;
+    for w in settings.warnings() {
+        eprintln!("warning: {w}");
+    }
     let threads = crate::set_threads(args.threads)?;
     let start = Instant::now();
     let scene = load_scene(args.scene.as_deref())?;
     let load_ms = start.elapsed().as_secs_f64() * 1e3;
+    let frames_held = if args.accumulate > 1 || args.taa {
+        2
+    } else {
+        1
+    };
+    let estimate = MemoryEstimate::new(&scene, &settings, frames_held);
+    crate::sysmem::check(&estimate, args.max_memory)?;
     let exposure = settings.exposure_or(scene.exposure);
     let scene_name = scene.name.clone();
 
@@ -138,6 +149,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             load_ms,
             bvh_ms,
             frames: args.accumulate,
+            estimate,
         };
         write_json(path, &FrameReport::new(&frame, &context))?;
     }

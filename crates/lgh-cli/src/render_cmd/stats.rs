@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
+use lgh_render::budget::MemoryEstimate;
 use lgh_render::passes::vpl_gen::PathNumbers;
 use lgh_render::{Frame, Method, RenderSettings};
 use serde::Serialize;
@@ -39,6 +40,8 @@ pub struct FrameReport<'a> {
     pub accumulated_frames: u32,
     /// Per-pass wall times in ms, summed over the frames (`total` includes the BVH build).
     pub timings_ms: serde_json::Map<String, serde_json::Value>,
+    /// Memory: the estimate made before rendering, the peak the process reached.
+    pub memory: MemoryReport,
     /// The method's own statistics.
     #[serde(flatten)]
     pub method_stats: serde_json::Map<String, serde_json::Value>,
@@ -62,6 +65,22 @@ pub struct ReportContext<'a> {
     pub bvh_ms: f64,
     /// Frames averaged.
     pub frames: u32,
+    /// The memory estimate checked before rendering.
+    pub estimate: MemoryEstimate,
+}
+
+/// The memory of a render, in bytes.
+#[derive(Debug, Serialize)]
+pub struct MemoryReport {
+    /// The estimate checked before rendering (its total), and its parts.
+    pub estimate_bytes: u64,
+    /// The parts of the estimate.
+    pub estimate: MemoryEstimate,
+    /// The peak resident memory of the process (Linux; null elsewhere).
+    pub peak_bytes: Option<u64>,
+    /// The peak divided by the VPLs made: the cost of a VPL with its hierarchy where VPLs
+    /// dominate.
+    pub peak_bytes_per_vpl: Option<f64>,
 }
 
 impl<'a> FrameReport<'a> {
@@ -95,18 +114,36 @@ impl<'a> FrameReport<'a> {
             triangles: c.triangles,
             accumulated_frames: c.frames,
             timings_ms: timings,
+            memory: MemoryReport {
+                estimate_bytes: c.estimate.total(),
+                estimate: c.estimate,
+                peak_bytes: crate::sysmem::peak_bytes(),
+                peak_bytes_per_vpl: crate::sysmem::peak_bytes()
+                    .filter(|_| !frame.vpls.vpls.is_empty())
+                    .map(|p| p as f64 / frame.vpls.vpls.len() as f64),
+            },
             method_stats,
             settings: s,
         }
     }
 }
 
-/// Writes `value` as pretty JSON to `path`.
+/// Writes `value` as pretty JSON to `path`. Like the images, the file appears whole or not at all (written under a temporary name in
+/// the same folder, then renamed).
 ///
 /// # Errors
 /// The file cannot be written.
 pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
     let text = serde_json::to_string_pretty(value)?;
-    std::fs::write(path, text + "\n")
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.partial"));
+    std::fs::write(&tmp, text + "\n")
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .inspect_err(|_| {
+            let _ = std::fs::remove_file(&tmp);
+        })
         .with_context(|| format!("{}: cannot write statistics", path.display()))
 }

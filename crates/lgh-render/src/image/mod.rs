@@ -6,6 +6,8 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use lgh_core::color::finite_or_zero;
 
+use crate::settings::MAX_PIXELS;
+
 pub mod metrics;
 pub mod tonemap;
 
@@ -158,6 +160,7 @@ impl Image {
         }
         match ImageFormat::from_path(path)? {
             ImageFormat::Exr => {
+                check_exr_header(path)?;
                 let img = exr::prelude::read_first_rgba_layer_from_file(
                     path,
                     |res, _| Image::new(res.width() as u32, res.height() as u32),
@@ -187,6 +190,38 @@ impl Image {
             }
         }
     }
+}
+
+/// Reads an EXR file's headers and refuses sizes that no real file of its length has, before
+/// the `exr` crate allocates for them (it trusts the header: a hostile resolution aborts the
+/// process on allocation): more pixels than [`MAX_PIXELS`], or more chunks than the file has
+/// room for in its offset table (8 bytes each).
+fn check_exr_header(path: &Path) -> Result<(), ImageError> {
+    let len = std::fs::metadata(path).map_or(0, |m| m.len());
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| ImageError::new(path, format!("cannot read EXR: {e}")))?;
+    for h in &meta.headers {
+        let pixels = (h.layer_size.0 as u64).saturating_mul(h.layer_size.1 as u64);
+        if pixels > MAX_PIXELS {
+            return Err(ImageError::new(
+                path,
+                format!(
+                    "EXR layer of {}x{} pixels: at most {MAX_PIXELS} pixels",
+                    h.layer_size.0, h.layer_size.1
+                ),
+            ));
+        }
+        if (h.chunk_count as u64).saturating_mul(8) > len {
+            return Err(ImageError::new(
+                path,
+                format!(
+                    "EXR header promises {} chunks, more than a file of {len} bytes holds",
+                    h.chunk_count
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Fails early, before any rendering, if `path` cannot be an output image: unknown extension

@@ -66,7 +66,7 @@ pub fn generate_vpls(
     let mut vpls = Vpls::with_capacity(target + bounces as usize);
     let max_paths = 64 * target as u64 + 1_000_000;
     let mut paths = 0u64;
-    if target == 0 || bounces == 0 || world.lights.is_empty() {
+    if target == 0 || bounces == 0 || world.lights.emits_nothing() {
         return VplSet { vpls, paths };
     }
     let sobol_seed = hash(&[seed, STREAM_VPL]);

@@ -129,6 +129,12 @@ impl LightSet {
         self.len() == 0
     }
 
+    /// True if no light emits anything (every power is zero), so no light path can start.
+    #[must_use]
+    pub fn emits_nothing(&self) -> bool {
+        self.by_power.is_none()
+    }
+
     /// Emitted power (RGB, W) of light `i` (directional lights: through the scene's disk).
     #[must_use]
     pub fn power(&self, i: usize) -> Vec3 {

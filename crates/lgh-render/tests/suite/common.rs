@@ -16,6 +16,16 @@ pub fn quad(scene: &mut Scene, corners: [Vec3; 4], material: u32) {
     scene.mesh.append(&prim, Mat4::IDENTITY, "mesh");
 }
 
+/// The corners of a square of half-size `s` at y = 0 facing up.
+pub fn floor_corners(s: f32) -> [Vec3; 4] {
+    [
+        Vec3::new(-s, 0.0, -s),
+        Vec3::new(-s, 0.0, s),
+        Vec3::new(s, 0.0, s),
+        Vec3::new(s, 0.0, -s),
+    ]
+}
+
 /// A square floor of half-size `s` at y = 0 facing up, albedo `albedo`, seen from above.
 pub fn floor_scene(s: f32, albedo: Vec3) -> Scene {
     let mut scene = Scene::new("floor");
@@ -23,16 +33,7 @@ pub fn floor_scene(s: f32, albedo: Vec3) -> Scene {
         albedo,
         ..Material::default()
     });
-    quad(
-        &mut scene,
-        [
-            Vec3::new(-s, 0.0, -s),
-            Vec3::new(-s, 0.0, s),
-            Vec3::new(s, 0.0, s),
-            Vec3::new(s, 0.0, -s),
-        ],
-        0,
-    );
+    quad(&mut scene, floor_corners(s), 0);
     scene.camera = Some(Camera {
         position: Vec3::new(0.0, 3.0 * s, 0.0),
         look_at: Vec3::ZERO,

@@ -8,6 +8,7 @@ mod convergence;
 mod determinism;
 mod direct_light;
 mod formats;
+mod hostile;
 mod ism;
 mod lgh_method;
 mod pt_method;

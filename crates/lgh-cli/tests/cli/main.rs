@@ -1,5 +1,7 @@
 //! The command line as a user meets it: successful renders and every kind of bad input.
 
+mod hardening;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -130,11 +132,12 @@ fn bad_inputs_give_one_clear_error_and_exit_code_2() {
         &lgh(&["render", s(&bad_gltf), "--out", o]),
         &["bad.gltf", "glTF"],
     );
-    // No lights.
-    let dark = w("dark.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    // No lights in a scene file (a mesh file alone gets a light at the camera).
+    w("dark.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let dark = w("dark.toml", "mesh = \"dark.obj\"\n");
     assert_error(
         &lgh(&["render", s(&dark), "--out", o]),
-        &["dark.obj", "no lights"],
+        &["dark.toml", "no lights"],
     );
     // No triangles.
     let empty = w("empty.obj", "# nothing\n");
