@@ -48,7 +48,30 @@ enum Command {
     Bench(bench_cmd::BenchArgs),
 }
 
+/// The last line of defence: a panic (a bug, since no input should cause one) prints one line
+/// instead of a stack trace; a closed stdout (`lgh bench ... | head`) ends the program quietly,
+/// as a Unix tool's SIGPIPE would.
+fn install_panic_hook() {
+    std::panic::set_hook(Box::new(|info| {
+        let message = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        if message.contains("Broken pipe") {
+            std::process::exit(0);
+        }
+        let place = info
+            .location()
+            .map(|l| format!(" at {}:{}", l.file(), l.line()))
+            .unwrap_or_default();
+        eprintln!("error: internal error{place}: {message} (please report it)");
+    }));
+}
+
 fn main() -> ExitCode {
+    install_panic_hook();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(a) => render_cmd::run(&a),

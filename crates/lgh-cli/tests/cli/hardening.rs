@@ -311,3 +311,20 @@ fn an_exr_header_with_a_huge_resolution_is_refused_before_reading() {
     assert_error(&lgh(&["diff", s(&bad), s(&good)]), &["bad.exr"]);
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `lgh bench ... | head` closes stdout early: the program ends quietly (it panicked in
+/// `println!` with exit code 101 before).
+#[test]
+fn a_closed_stdout_ends_the_program_quietly() {
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_lgh"))
+        .args(["bench", "rays", "--rays", "20000"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {err}", out.status);
+    assert!(!err.contains("panicked"), "{err}");
+}
