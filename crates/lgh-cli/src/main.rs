@@ -41,6 +41,10 @@ enum Command {
     // Negative numbers are values, so that `--alpha -1` gets "must be a positive number".
     #[command(allow_negative_numbers = true)]
     Render(Box<render_cmd::RenderArgs>),
+    /// Fly through a scene in a window while it renders (or --headless); keys change the
+    /// method and its settings, and move the camera and the light.
+    #[command(allow_negative_numbers = true)]
+    View(Box<lgh_view::ViewArgs>),
     /// Compare image A against reference B (EXR or PNG, same size).
     Diff(diff_cmd::DiffArgs),
     /// Measure performance.
@@ -75,6 +79,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(a) => render_cmd::run(&a),
+        Command::View(a) => view(*a),
         Command::Diff(a) => diff_cmd::run(&a),
         Command::Bench(a) => bench_cmd::run(&a),
     };
@@ -84,6 +89,19 @@ fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::from(2)
         }
+    }
+}
+
+/// `lgh view`: loads the scene (default: the Cornell box with a point light, which can be
+/// moved) and runs the viewer.
+fn view(args: lgh_view::ViewArgs) -> anyhow::Result<()> {
+    set_threads(args.threads)?;
+    let default = std::path::PathBuf::from("builtin:cornell-moving-light");
+    let scene = scene_arg::load_scene(Some(args.scene.as_ref().unwrap_or(&default)))?;
+    if args.headless {
+        lgh_view::headless::run(&args, scene)
+    } else {
+        lgh_view::window::run(args, scene)
     }
 }
 

@@ -1,6 +1,7 @@
 //! The command line as a user meets it: successful renders and every kind of bad input.
 
 mod hardening;
+mod view;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

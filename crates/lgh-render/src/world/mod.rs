@@ -2,7 +2,7 @@
 //! read in their inner loops.
 
 use glam::{Vec2, Vec3};
-use lgh_scene::Scene;
+use lgh_scene::{Camera, Light, Scene};
 
 pub mod accel;
 pub mod lights;
@@ -100,6 +100,20 @@ impl World {
             self.face_normals = face_normals(&self.scene.mesh);
         }
         self.lights = LightSet::new(&self.scene, self.radius);
+    }
+
+    /// Places the camera and the punctual lights (an interactive viewer moving them) and
+    /// rebuilds the light tables; the mesh and its BVH stay.
+    pub fn set_view(&mut self, camera: Camera, lights: Vec<Light>) {
+        self.scene.camera = Some(camera);
+        self.scene.lights = lights;
+        self.lights = LightSet::new(&self.scene, self.radius);
+    }
+
+    /// The camera and punctual lights as loaded (before any animation or [`World::set_view`]).
+    #[must_use]
+    pub fn rest_view(&self) -> (Option<Camera>, &[Light]) {
+        (self.rest.0.clone(), &self.rest.1)
     }
 
     /// The surface at `hit` seen along the unit direction `dir`.

@@ -1,0 +1,87 @@
+//! `lgh view`: the headless loop and its statistics, and the window under a virtual X server.
+
+use super::{assert_error, lgh, s, temp_dir};
+
+const SMALL: [&str; 6] = ["--size", "160x90", "--vpls", "5000", "--frames", "6"];
+
+#[test]
+fn headless_view_reports_fps_and_pass_medians_and_follows_the_key_script() {
+    let d = temp_dir("view");
+    let stats = d.join("s.json");
+    let shot = d.join("a.png");
+    let moved = d.join("b.png");
+    let run = |extra: &[&str], png: &std::path::Path| {
+        let args = [
+            &["view", "--headless", "--screenshot", s(png)][..],
+            &SMALL,
+            extra,
+        ]
+        .concat();
+        let r = lgh(&args);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    };
+    run(
+        &["--stats", s(&stats), "--light-speed", "5", "--taa"],
+        &shot,
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert!(json["fps"].as_f64().unwrap() > 0.0, "{json}");
+    assert_eq!(json["frames"], 6);
+    for pass in [
+        "frame",
+        "vpl_generation",
+        "lgh_build",
+        "gbuffer",
+        "shadow_rays",
+    ] {
+        assert!(json["median_ms"][pass].as_f64().is_some(), "{pass}: {json}");
+    }
+    assert!(json["grid_lights"].as_u64().unwrap() > 0);
+    // The script moves the camera: another image.
+    run(&["--keys", "w,w,a,left"], &moved);
+    let diff = lgh(&["diff", s(&moved), s(&shot), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&diff.stdout).unwrap();
+    assert!(v["flip"].as_f64().unwrap() > 0.01, "{v}");
+    assert_error(&lgh(&["view", "--headless"]), &["--frames"]);
+    assert_error(
+        &lgh(&["view", "--headless", "--frames", "2", "--keys", "w,zz"]),
+        &["--keys", "zz"],
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The window opens under Xvfb, renders, takes the scripted keys and writes a screenshot
+/// equal to the headless frame.
+#[test]
+#[cfg_attr(not(xvfb), ignore = "needs Debian's xvfb")]
+fn the_window_under_xvfb_shows_the_headless_frame() {
+    let d = temp_dir("xvfb");
+    let window = d.join("w.png");
+    let headless = d.join("h.png");
+    let keys = ["--keys", "w,m,l,i"];
+    let bin = env!("CARGO_BIN_EXE_lgh");
+    let args = [
+        &["-a", bin, "view", "--screenshot", s(&window)][..],
+        &SMALL,
+        &keys,
+    ]
+    .concat();
+    let r = std::process::Command::new("xvfb-run")
+        .args(&args)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let r = lgh(&[
+        &["view", "--headless", "--screenshot", s(&headless)][..],
+        &SMALL,
+        &keys,
+    ]
+    .concat());
+    assert!(r.status.success());
+    let diff = lgh(&["diff", s(&window), s(&headless), "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&diff.stdout).unwrap();
+    assert!(v["flip"].as_f64().unwrap() <= 0.01, "{v}");
+    let _ = std::fs::remove_dir_all(&d);
+}

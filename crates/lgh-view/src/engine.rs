@@ -1,0 +1,139 @@
+//! The frame loop of the viewer: turns a [`ViewState`] into a shown frame. While the view is
+//! still, frames with independent VPL sets (and, for lgh, random grid offsets) accumulate
+//! into a running mean that converges (docs/design.md, "Accumulation"); any change restarts
+//! it. While it moves, frames go through the temporal filter if it is on. Moving the light
+//! regenerates the VPLs and rebuilds the hierarchy, as every frame does.
+
+use std::time::Instant;
+
+use glam::Vec3;
+use lgh_render::accumulate::frame_settings;
+use lgh_render::image::tonemap::tonemap_to_srgb8;
+use lgh_render::methods::lgh::LghStats;
+use lgh_render::sequence::Sequence;
+use lgh_render::{FrameMemory, Image, RenderError, Silent, World, render_frame_with};
+use lgh_scene::{Light, Scene};
+
+use crate::state::ViewState;
+
+/// A frame ready to show.
+#[derive(Clone, Debug)]
+pub struct ShownFrame {
+    /// The linear image shown (the running mean while still).
+    pub image: Image,
+    /// The image tone-mapped, one `0x00RRGGBB` per pixel (softbuffer's layout).
+    pub pixels: Vec<u32>,
+    /// Per-pass times of this frame, ms (`total` is the whole render).
+    pub timings: Vec<(String, f64)>,
+    /// VPLs of this frame.
+    pub vpls: usize,
+    /// Grid lights of this frame's hierarchy (lgh).
+    pub grid_lights: Option<usize>,
+    /// Frames in the running mean (1 while moving).
+    pub accumulated: u32,
+    /// Wall time of the frame, ms, including the view update.
+    pub ms: f64,
+}
+
+/// Renders the frames of a view.
+pub struct FrameLoop {
+    world: World,
+    rest_lights: Vec<Light>,
+    sequence: Sequence,
+    memory: FrameMemory,
+    sum: Vec<Vec3>,
+    accumulated: u32,
+    shown_version: Option<u64>,
+    frame: u64,
+    exposure: f32,
+}
+
+impl FrameLoop {
+    /// The loop over `scene` (finished), shown with `exposure` (None: the scene's).
+    #[must_use]
+    pub fn new(scene: Scene, exposure: Option<f32>) -> Self {
+        let exposure = exposure.unwrap_or(scene.exposure);
+        let world = World::new(scene);
+        let rest_lights = world.rest_view().1.to_vec();
+        Self {
+            world,
+            rest_lights,
+            sequence: Sequence::new(None),
+            memory: FrameMemory::default(),
+            sum: Vec::new(),
+            accumulated: 0,
+            shown_version: None,
+            frame: 0,
+            exposure,
+        }
+    }
+
+    /// The world rendered (its scene, radius and centre).
+    #[must_use]
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The exposure of the shown frames.
+    #[must_use]
+    pub fn exposure(&self) -> f32 {
+        self.exposure
+    }
+
+    /// Renders the next frame of `state`.
+    ///
+    /// # Errors
+    /// The settings are invalid or the VPLs form no hierarchy.
+    pub fn render(&mut self, state: &ViewState) -> Result<ShownFrame, RenderError> {
+        let start = Instant::now();
+        let still = self.shown_version == Some(state.version);
+        if !still {
+            let lights = state.lights(&self.rest_lights, self.world.centre);
+            self.world.set_view(state.camera(), lights);
+            self.accumulated = 0;
+        }
+        let mut settings = frame_settings(&state.settings, self.frame as u32, 2);
+        settings.seed = state.settings.seed.wrapping_add(self.frame);
+        settings.slc.frame_seed = self.frame as u32;
+        self.frame += 1;
+        let frame = if still || !state.taa {
+            render_frame_with(&self.world, &settings, &Silent, &mut self.memory)?
+        } else {
+            self.sequence.taa = Some(Default::default());
+            self.sequence.render(&self.world, &settings, &Silent)?
+        };
+        self.shown_version = Some(state.version);
+        let pixels = &frame.image.pixels;
+        if self.accumulated == 0 || self.sum.len() != pixels.len() {
+            self.sum.clone_from(pixels);
+            self.accumulated = 1;
+        } else {
+            for (s, p) in self.sum.iter_mut().zip(pixels) {
+                *s += *p;
+            }
+            self.accumulated += 1;
+        }
+        let inv = 1.0 / self.accumulated as f32;
+        let mean: Vec<Vec3> = self.sum.iter().map(|s| *s * inv).collect();
+        let rgb = tonemap_to_srgb8(&mean, self.exposure);
+        let packed = rgb
+            .chunks_exact(3)
+            .map(|c| (u32::from(c[0]) << 16) | (u32::from(c[1]) << 8) | u32::from(c[2]))
+            .collect();
+        let shown = ShownFrame {
+            image: Image::from_pixels(frame.image.width, frame.image.height, mean),
+            pixels: packed,
+            timings: frame.timings.0.clone(),
+            vpls: frame.vpls.vpls.len(),
+            grid_lights: frame.stats::<LghStats>().map(|s| s.grid_lights),
+            accumulated: self.accumulated,
+            ms: start.elapsed().as_secs_f64() * 1e3,
+        };
+        if still || !state.taa {
+            self.memory.recycle_gbuffer(frame.gbuffer);
+        } else {
+            self.sequence.recycle(frame);
+        }
+        Ok(shown)
+    }
+}

@@ -1,0 +1,103 @@
+//! # lgh-view: the interactive viewer
+//!
+//! `lgh view` flies through a scene while the many-lights renderer draws it: the lighting
+//! grid hierarchy is an interactive method (LGH paper, section 5), and here every frame
+//! regenerates the VPLs and rebuilds the hierarchy, so moving the light is as cheap as moving
+//! the camera.
+//!
+//! | module | what it holds |
+//! | --- | --- |
+//! | [`state`] | the view (settings, camera, light) and the actions that change it; key map and help |
+//! | [`engine`] | the frame loop: one frame of a view, accumulation while still, temporal filtering while moving |
+//! | [`headless`] | the same loop without a window, driven by a key script: tests, CI, benchmarks |
+//! | [`window`] | the window (winit + softbuffer): input on the event loop, rendering on a worker thread |
+//!
+//! The renderer knows nothing of windows: this crate drives `lgh-render` through its public
+//! API only.
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+pub mod engine;
+pub mod headless;
+pub mod state;
+pub mod window;
+
+use std::path::PathBuf;
+
+use clap::Args;
+use lgh_render::RenderSettings;
+
+/// Arguments of `lgh view`.
+#[derive(Debug, Args)]
+pub struct ViewArgs {
+    /// Scene file: .toml, .gltf, .glb or .obj, or builtin:NAME (see `lgh render --help`).
+    /// Default: the Cornell box with a point light (builtin:cornell-moving-light, still),
+    /// whose light can be moved.
+    pub scene: Option<PathBuf>,
+    /// Size of the rendered frame, WIDTHxHEIGHT (the window shows it scaled).
+    #[arg(long, default_value = "640x360", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// The starting rendering settings (keys change them; see the help printed at start).
+    #[command(flatten)]
+    pub settings: RenderSettings,
+    /// Start with temporal filtering of the shadows (T toggles it).
+    #[arg(long)]
+    pub taa: bool,
+    /// Quit after N frames.
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// Write the last frame shown to this PNG at exit.
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// Write statistics as JSON at exit: `fps` (frames over wall time), the median of each
+    /// pass in ms, and the settings.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+    /// Run the same loop without a window (for tests, CI and benchmarks); needs --frames.
+    #[arg(long)]
+    pub headless: bool,
+    /// Turn the light by this many degrees every frame (a moving light: VPLs and hierarchy
+    /// are rebuilt each frame, and nothing accumulates).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub light_speed: f32,
+    /// Keys pressed one per frame from the first frame on, as a script (e.g. "w,w,a,m,l"):
+    /// the same actions as the keyboard.
+    #[arg(long, value_delimiter = ',')]
+    pub keys: Vec<String>,
+    /// Worker threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+}
+
+impl ViewArgs {
+    /// The starting settings with the frame size of `--size`.
+    #[must_use]
+    pub fn render_settings(&self) -> RenderSettings {
+        RenderSettings {
+            width: self.size.0,
+            height: self.size.1,
+            ..self.settings.clone()
+        }
+    }
+}
+
+/// Parses `WIDTHxHEIGHT` (each side 16 to 8192).
+///
+/// # Errors
+/// Not of that form or out of range.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT (e.g. 640x360)"))?;
+    let side = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|v| (16..=8192).contains(v))
+            .ok_or_else(|| format!("'{s}': each side must be a number from 16 to 8192"))
+    };
+    Ok((side(w)?, side(h)?))
+}

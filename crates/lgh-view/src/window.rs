@@ -1,0 +1,292 @@
+//! The window: winit's event loop on the main thread takes the input and presents the last
+//! finished frame through softbuffer; a worker thread owns the frame loop and renders one
+//! frame after another, so the window stays responsive however long a frame takes.
+
+use std::num::NonZeroU32;
+use std::rc::Rc;
+use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
+use std::sync::{Arc, Mutex};
+
+use anyhow::{Result, anyhow};
+use lgh_scene::Scene;
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop, EventLoopProxy};
+use winit::keyboard::{Key, NamedKey};
+use winit::window::{Window, WindowId};
+
+use crate::ViewArgs;
+use crate::engine::ShownFrame;
+use crate::headless::{Record, finish, script_step, start};
+use crate::state::{Action, CONTROLS, action_of_key};
+
+/// What the worker tells the event loop.
+#[derive(Debug)]
+enum Note {
+    /// A new frame is in the shared slot.
+    Frame,
+    /// The worker is done (frame limit, or an error as text).
+    Done(Option<String>),
+}
+
+/// The frame the worker finished last, with a line for the title bar.
+type Slot = Arc<Mutex<Option<(ShownFrame, String)>>>;
+
+/// Prints the controls.
+pub fn print_help() {
+    eprintln!("lgh view controls:");
+    for (key, what) in CONTROLS {
+        eprintln!("  {key:<14} {what}");
+    }
+}
+
+/// Opens the window over `scene` and runs until it is closed or `--frames` are shown.
+///
+/// # Errors
+/// No display, bad settings, or a failed frame.
+pub fn run(args: ViewArgs, scene: Scene) -> Result<()> {
+    let event_loop = EventLoop::<Note>::with_user_event()
+        .build()
+        .map_err(|e| anyhow!("cannot open a window ({e}); try --headless"))?;
+    let (engine, state) = start(&args, scene)?;
+    let (tx, rx) = channel::<Action>();
+    let slot: Slot = Arc::new(Mutex::new(None));
+    let proxy = event_loop.create_proxy();
+    let worker_slot = Arc::clone(&slot);
+    let args = Arc::new(args);
+    let worker_args = Arc::clone(&args);
+    let worker = std::thread::spawn(move || {
+        let result = work(&worker_args, engine, state, &rx, &worker_slot, &proxy);
+        let _ = proxy.send_event(Note::Done(result.err().map(|e| format!("{e:#}"))));
+    });
+    print_help();
+    let mut app = App {
+        size: args.size,
+        window: None,
+        surface: None,
+        actions: tx,
+        slot,
+        dragging: false,
+        cursor: None,
+        error: None,
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| anyhow!("window: {e}"))?;
+    drop(app.actions);
+    let _ = worker.join();
+    match app.error {
+        Some(e) => Err(anyhow!(e)),
+        None => Ok(()),
+    }
+}
+
+/// The worker: applies the actions and the script, renders, publishes, until the frame limit
+/// or until the window closes (the action channel hangs up).
+fn work(
+    args: &ViewArgs,
+    mut engine: crate::engine::FrameLoop,
+    mut state: crate::state::ViewState,
+    actions: &Receiver<Action>,
+    slot: &Slot,
+    proxy: &EventLoopProxy<Note>,
+) -> Result<()> {
+    let mut record = Record::default();
+    record.start();
+    let mut frame = 0u64;
+    loop {
+        loop {
+            match actions.try_recv() {
+                Ok(a) => {
+                    if let Some(line) = state.apply(a) {
+                        eprintln!("{line}");
+                    }
+                }
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => {
+                    return finish(args, &state, &record, engine.exposure());
+                }
+            }
+        }
+        script_step(args, &mut state, frame);
+        let shown = engine.render(&state)?;
+        let title = title(&shown, &state);
+        if let Ok(mut s) = slot.lock() {
+            *s = Some((shown.clone(), title));
+        }
+        record.push(shown);
+        frame += 1;
+        if proxy.send_event(Note::Frame).is_err() {
+            return finish(args, &state, &record, engine.exposure());
+        }
+        if args.frames.is_some_and(|n| frame >= n) {
+            return finish(args, &state, &record, engine.exposure());
+        }
+    }
+}
+
+/// The readout: frame time, method and settings, VPLs, grid lights, the slowest passes.
+fn title(f: &ShownFrame, s: &crate::state::ViewState) -> String {
+    let mut passes: Vec<&(String, f64)> = f.timings.iter().filter(|(n, _)| n != "total").collect();
+    passes.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let top: Vec<String> = passes
+        .iter()
+        .take(4)
+        .map(|(n, ms)| format!("{n} {ms:.0}"))
+        .collect();
+    let st = &s.settings;
+    format!(
+        "lgh view | {:.1} fps ({:.0} ms) | {} a{} il{} k{} | {} VPLs{} | {}{} | H: help",
+        1e3 / f.ms.max(1e-3),
+        f.ms,
+        st.method.name(),
+        st.lgh.alpha,
+        st.tiling.interleave.unwrap_or(1),
+        st.shadows.samples,
+        f.vpls,
+        f.grid_lights
+            .map_or(String::new(), |g| format!(", {g} grid lights")),
+        top.join(", "),
+        if f.accumulated > 1 {
+            format!(" | {} frames accumulated", f.accumulated)
+        } else {
+            String::new()
+        }
+    )
+}
+
+struct App {
+    size: (u32, u32),
+    window: Option<Rc<Window>>,
+    surface: Option<softbuffer::Surface<Rc<Window>, Rc<Window>>>,
+    actions: Sender<Action>,
+    slot: Slot,
+    dragging: bool,
+    cursor: Option<(f64, f64)>,
+    error: Option<String>,
+}
+
+impl App {
+    /// Copies the last frame to the window, scaled to its size (nearest pixel).
+    fn present(&mut self) {
+        let (Some(window), Some(surface)) = (&self.window, &mut self.surface) else {
+            return;
+        };
+        let Some((frame, title)) = self.slot.lock().ok().and_then(|s| s.clone()) else {
+            return;
+        };
+        window.set_title(&title);
+        let size = window.inner_size();
+        let (Some(w), Some(h)) = (NonZeroU32::new(size.width), NonZeroU32::new(size.height)) else {
+            return;
+        };
+        if surface.resize(w, h).is_err() {
+            return;
+        }
+        let Ok(mut buffer) = surface.buffer_mut() else {
+            return;
+        };
+        let (fw, fh) = (self.size.0 as usize, self.size.1 as usize);
+        let (ww, wh) = (size.width as usize, size.height as usize);
+        if frame.pixels.len() == fw * fh {
+            for y in 0..wh {
+                let sy = y * fh / wh;
+                for x in 0..ww {
+                    buffer[y * ww + x] = frame.pixels[sy * fw + x * fw / ww];
+                }
+            }
+        }
+        let _ = buffer.present();
+    }
+}
+
+impl ApplicationHandler<Note> for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.window.is_some() {
+            return;
+        }
+        let attrs = Window::default_attributes()
+            .with_title("lgh view")
+            .with_inner_size(winit::dpi::PhysicalSize::new(self.size.0, self.size.1));
+        let made = event_loop.create_window(attrs).map(Rc::new).map(|w| {
+            let context = softbuffer::Context::new(Rc::clone(&w));
+            (w, context)
+        });
+        match made {
+            Ok((w, Ok(context))) => match softbuffer::Surface::new(&context, Rc::clone(&w)) {
+                Ok(surface) => {
+                    self.surface = Some(surface);
+                    self.window = Some(w);
+                }
+                Err(e) => {
+                    self.error = Some(format!("cannot draw in the window: {e}"));
+                    event_loop.exit();
+                }
+            },
+            Ok((_, Err(e))) => {
+                self.error = Some(format!("cannot draw in the window: {e}"));
+                event_loop.exit();
+            }
+            Err(e) => {
+                self.error = Some(format!("cannot open a window: {e}; try --headless"));
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn user_event(&mut self, event_loop: &ActiveEventLoop, note: Note) {
+        match note {
+            Note::Frame => {
+                if let Some(w) = &self.window {
+                    w.request_redraw();
+                }
+            }
+            Note::Done(error) => {
+                self.present();
+                if error.is_some() {
+                    self.error = error;
+                }
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::RedrawRequested | WindowEvent::Resized(_) => self.present(),
+            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+                let name = match &event.logical_key {
+                    Key::Named(NamedKey::Escape) => return event_loop.exit(),
+                    Key::Named(NamedKey::ArrowLeft) => "left".to_string(),
+                    Key::Named(NamedKey::ArrowRight) => "right".to_string(),
+                    Key::Named(NamedKey::ArrowUp) => "up".to_string(),
+                    Key::Named(NamedKey::ArrowDown) => "down".to_string(),
+                    Key::Character(c) => c.to_string(),
+                    _ => return,
+                };
+                if name.eq_ignore_ascii_case("h") {
+                    print_help();
+                } else if let Some(a) = action_of_key(&name) {
+                    let _ = self.actions.send(a);
+                }
+            }
+            WindowEvent::MouseInput {
+                state,
+                button: MouseButton::Left,
+                ..
+            } => self.dragging = state == ElementState::Pressed,
+            WindowEvent::CursorMoved { position, .. } => {
+                if let (true, Some((x, y))) = (self.dragging, self.cursor) {
+                    let dx = (position.x - x).round() as i16;
+                    let dy = (position.y - y).round() as i16;
+                    if dx != 0 || dy != 0 {
+                        let _ = self.actions.send(Action::Look(dx, dy));
+                    }
+                }
+                self.cursor = Some((position.x, position.y));
+            }
+            _ => {}
+        }
+    }
+}
