@@ -229,6 +229,34 @@ pub struct SettingsError {
 /// Most VPLs a frame: 2^24 (about 4 GB with their hierarchy).
 pub const MAX_VPLS: usize = 1 << 24;
 
+/// Parses `WIDTHxHEIGHT` with both sides positive.
+///
+/// # Errors
+/// Not of that form, a side of zero, or more than [`MAX_PIXELS`] pixels.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT (e.g. 640x360)"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}': width is not a number"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}': height is not a number"))?;
+    if w == 0 || h == 0 {
+        return Err(format!("'{s}': width and height must be at least 1"));
+    }
+    if u64::from(w) * u64::from(h) > MAX_PIXELS {
+        return Err(format!(
+            "'{s}': image too large (at most {} pixels)",
+            MAX_PIXELS
+        ));
+    }
+    Ok((w, h))
+}
+
 /// Largest image: 2^28 pixels (16384 x 16384).
 pub const MAX_PIXELS: u64 = 1 << 28;
 

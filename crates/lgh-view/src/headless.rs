@@ -114,8 +114,9 @@ pub fn finish(args: &ViewArgs, state: &ViewState, record: &Record, exposure: f32
 }
 
 fn write_json(path: &Path, v: &serde_json::Value) -> Result<()> {
-    let text = serde_json::to_string_pretty(v)?;
-    std::fs::write(path, text + "\n").with_context(|| format!("{}: cannot write", path.display()))
+    let text = serde_json::to_string_pretty(v)? + "\n";
+    lgh_render::image::write_atomic(path, text.as_bytes())
+        .with_context(|| format!("{}: cannot write statistics", path.display()))
 }
 
 /// Runs `args.frames` frames of `scene` without a window.

@@ -29,6 +29,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use lgh_render::RenderSettings;
+use lgh_render::settings::parse_size;
 
 /// Arguments of `lgh view`.
 #[derive(Debug, Args)]
@@ -82,22 +83,4 @@ impl ViewArgs {
             ..self.settings.clone()
         }
     }
-}
-
-/// Parses `WIDTHxHEIGHT` (each side 16 to 8192).
-///
-/// # Errors
-/// Not of that form or out of range.
-pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT (e.g. 640x360)"))?;
-    let side = |v: &str| {
-        v.trim()
-            .parse::<u32>()
-            .ok()
-            .filter(|v| (16..=8192).contains(v))
-            .ok_or_else(|| format!("'{s}': each side must be a number from 16 to 8192"))
-    };
-    Ok((side(w)?, side(h)?))
 }

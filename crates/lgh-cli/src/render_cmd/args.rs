@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use lgh_render::RenderSettings;
 use lgh_render::denoise::temporal::TemporalSettings;
+pub use lgh_render::settings::parse_size;
 
 /// Render a scene to an image.
 #[derive(Debug, Args)]
@@ -115,31 +116,6 @@ pub fn frame_path(pattern: &Path, f: u32) -> PathBuf {
     out.push_str(&format!("{f:0len$}"));
     out.push_str(&text[start + len..]);
     PathBuf::from(out)
-}
-
-/// Parses `WIDTHxHEIGHT` with both sides positive.
-pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT (e.g. 640x360)"))?;
-    let w: u32 = w
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}': width is not a number"))?;
-    let h: u32 = h
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}': height is not a number"))?;
-    if w == 0 || h == 0 {
-        return Err(format!("'{s}': width and height must be at least 1"));
-    }
-    if u64::from(w) * u64::from(h) > lgh_render::settings::MAX_PIXELS {
-        return Err(format!(
-            "'{s}': image too large (at most {} pixels)",
-            lgh_render::settings::MAX_PIXELS
-        ));
-    }
-    Ok((w, h))
 }
 
 #[cfg(test)]

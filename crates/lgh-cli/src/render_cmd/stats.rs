@@ -134,16 +134,7 @@ impl<'a> FrameReport<'a> {
 /// # Errors
 /// The file cannot be written.
 pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
-    let text = serde_json::to_string_pretty(value)?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.partial"));
-    std::fs::write(&tmp, text + "\n")
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .inspect_err(|_| {
-            let _ = std::fs::remove_file(&tmp);
-        })
+    let text = serde_json::to_string_pretty(value)? + "\n";
+    lgh_render::image::write_atomic(path, text.as_bytes())
         .with_context(|| format!("{}: cannot write statistics", path.display()))
 }

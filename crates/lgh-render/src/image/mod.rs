@@ -111,11 +111,7 @@ impl Image {
     pub fn save(&self, path: &Path, exposure: f32) -> Result<(), ImageError> {
         let format = ImageFormat::from_path(path)?;
         check_output_dir(path)?;
-        let file_name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let tmp = path.with_file_name(format!(".{file_name}.partial"));
+        let tmp = partial_path(path);
         let result = match format {
             ImageFormat::Png => {
                 let bytes = tonemap_to_srgb8(&self.pixels, exposure);
@@ -222,6 +218,29 @@ fn check_exr_header(path: &Path) -> Result<(), ImageError> {
         }
     }
     Ok(())
+}
+
+/// Writes `bytes` to `path` so that the file appears whole or not at all: under a temporary
+/// name in the same folder, then renamed (the temporary file is removed on failure).
+///
+/// # Errors
+/// The file cannot be written or renamed.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let tmp = partial_path(path);
+    std::fs::write(&tmp, bytes)
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .inspect_err(|_| {
+            let _ = std::fs::remove_file(&tmp);
+        })
+}
+
+/// The temporary name of `path` while it is written: `.NAME.partial` beside it.
+fn partial_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.partial"))
 }
 
 /// Fails early, before any rendering, if `path` cannot be an output image: unknown extension
