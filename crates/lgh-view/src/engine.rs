@@ -92,9 +92,8 @@ impl FrameLoop {
             self.world.set_view(state.camera(), lights);
             self.accumulated = 0;
         }
-        let mut settings = frame_settings(&state.settings, self.frame as u32, 2);
-        settings.seed = state.settings.seed.wrapping_add(self.frame);
-        settings.slc.frame_seed = self.frame as u32;
+        // Every frame its own seeds and, for lgh, its own grid offset.
+        let settings = frame_settings(&state.settings, self.frame as u32, 2);
         self.frame += 1;
         let frame = if still || !state.taa {
             render_frame_with(&self.world, &settings, &Silent, &mut self.memory)?

@@ -80,8 +80,6 @@ pub struct ViewState {
     pub pitch: f32,
     /// Vertical field of view, degrees.
     pub fov: f32,
-    /// Up of the scene camera.
-    pub up: Vec3,
     /// Angle of the first punctual light about the scene's vertical axis, radians.
     pub light_angle: f32,
     /// Temporal filtering of the shadows.
@@ -103,7 +101,6 @@ impl ViewState {
             yaw: (-dir.x).atan2(-dir.z),
             pitch: dir.y.clamp(-1.0, 1.0).asin(),
             fov: camera.fov_y_degrees,
-            up: camera.up,
             light_angle: 0.0,
             taa,
             step: radius / 20.0,

@@ -29,8 +29,8 @@ enum Note {
     Done(Option<String>),
 }
 
-/// The frame the worker finished last, with a line for the title bar.
-type Slot = Arc<Mutex<Option<(ShownFrame, String)>>>;
+/// The pixels of the frame the worker finished last, with a line for the title bar.
+type Slot = Arc<Mutex<Option<(Vec<u32>, String)>>>;
 
 /// Prints the controls.
 pub fn print_help() {
@@ -112,7 +112,7 @@ fn work(
         let shown = engine.render(&state)?;
         let title = title(&shown, &state);
         if let Ok(mut s) = slot.lock() {
-            *s = Some((shown.clone(), title));
+            *s = Some((shown.pixels.clone(), title));
         }
         record.push(shown);
         frame += 1;
@@ -172,7 +172,7 @@ impl App {
         let (Some(window), Some(surface)) = (&self.window, &mut self.surface) else {
             return;
         };
-        let Some((frame, title)) = self.slot.lock().ok().and_then(|s| s.clone()) else {
+        let Some((pixels, title)) = self.slot.lock().ok().and_then(|s| s.clone()) else {
             return;
         };
         window.set_title(&title);
@@ -188,11 +188,11 @@ impl App {
         };
         let (fw, fh) = (self.size.0 as usize, self.size.1 as usize);
         let (ww, wh) = (size.width as usize, size.height as usize);
-        if frame.pixels.len() == fw * fh {
+        if pixels.len() == fw * fh {
             for y in 0..wh {
                 let sy = y * fh / wh;
                 for x in 0..ww {
-                    buffer[y * ww + x] = frame.pixels[sy * fw + x * fw / ww];
+                    buffer[y * ww + x] = pixels[sy * fw + x * fw / ww];
                 }
             }
         }
