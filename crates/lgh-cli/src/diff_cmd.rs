@@ -8,7 +8,7 @@ use glam::Vec3;
 use lgh_core::color::luminance;
 use lgh_render::Image;
 use lgh_render::image::ImageFormat;
-use lgh_render::image::metrics::{diff, display_bytes, flip_mean, mean_luminance};
+use lgh_render::image::metrics::{diff, display_bytes, flip_map, flip_picture, mean_luminance};
 
 /// Compare image A against the reference B.
 #[derive(Debug, Args)]
@@ -28,6 +28,10 @@ pub struct DiffArgs {
     /// blue where A is darker, red where brighter, white where equal, saturated at +-0.5.
     #[arg(long)]
     pub map: Option<PathBuf>,
+    /// Also write the per-pixel FLIP error to this PNG (FLIP's magma colour map: black where
+    /// the images agree, yellow where they differ most).
+    #[arg(long)]
+    pub flip_map: Option<PathBuf>,
 }
 
 pub fn run(args: &DiffArgs) -> Result<()> {
@@ -35,13 +39,17 @@ pub fn run(args: &DiffArgs) -> Result<()> {
     let b = Image::load(&args.b)?;
     let m =
         diff(&a, &b).map_err(|e| anyhow!("{} vs {}: {e}", args.a.display(), args.b.display()))?;
-    let flip = flip_mean(
+    let flip = flip_map(
         &display_bytes(&a, ImageFormat::from_path(&args.a)?, args.exposure),
         &display_bytes(&b, ImageFormat::from_path(&args.b)?, args.exposure),
         a.width,
         a.height,
     )
     .map_err(|e| anyhow!("{e}"))?;
+    if let Some(path) = &args.flip_map {
+        lgh_render::image::save_png(path, a.width, a.height, &flip_picture(&flip))?;
+    }
+    let flip = flip.iter().map(|&x| f64::from(x)).sum::<f64>() / flip.len() as f64;
     if let Some(path) = &args.map {
         error_map(&a, &b).save(path, 1.0)?;
     }

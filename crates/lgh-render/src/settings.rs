@@ -17,7 +17,7 @@ use crate::methods::slc::SlcSettings;
 use crate::methods::{Illumination, Method, lgh};
 use crate::passes::vpl_gen::PathNumbers;
 use crate::shading::interleave::BlurParams;
-use crate::shading::ratio::{MAX_SHADOW_SAMPLES, RatioFilter};
+use crate::shading::ratio::{MAX_SHADOW_SAMPLES, RATIO_VISIBILITY, RatioFilter};
 
 /// Which part of the radiance the output image holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
@@ -57,6 +57,10 @@ pub struct ShadowSettings {
     /// lgh, slc: a-trous passes.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = ShadowSettings::default().filter_passes))]
     pub filter_passes: u32,
+    /// lgh, slc: the a-trous filter's colour weight c_phi of its first pass (Dammertz et al.
+    /// 2010; halved every pass): larger smooths the shadow ratio more across its own edges.
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = ShadowSettings::default().filter_color))]
+    pub filter_color: f32,
 }
 
 impl Default for ShadowSettings {
@@ -65,6 +69,7 @@ impl Default for ShadowSettings {
             samples: 4,
             filter: ShadowFilter::Atrous,
             filter_passes: 5,
+            filter_color: 0.5,
         }
     }
 }
@@ -313,6 +318,8 @@ impl RenderSettings {
                 phases: n,
                 ..self.tiling.blur
             }),
+            max_ratio: RATIO_VISIBILITY,
+            c_phi: self.shadows.filter_color,
         }
     }
 
@@ -367,6 +374,7 @@ impl RenderSettings {
             );
         }
         positive("alpha", self.lgh.alpha)?;
+        positive("filter-color", self.shadows.filter_color)?;
         positive("clamp-fraction", self.clamp_fraction)?;
         in_range(
             "shadow-samples",
@@ -382,6 +390,14 @@ impl RenderSettings {
             in_range("tile", t, 1, 256)?;
         }
         in_range("start-level", self.lgh.start_level, 0, 1)?;
+        if let Some((name, expected)) = self.lgh.unbiased_conflict() {
+            let value = match name {
+                "shadow-target" => format!("{:?}", self.lgh.shadow_target).to_lowercase(),
+                "jitter-at" => format!("{:?}", self.lgh.jitter).to_lowercase(),
+                _ => self.lgh.construction.name().to_string(),
+            };
+            return err(name, &value, expected);
+        }
         if let LevelCount::Fixed(l) = self.lgh.levels {
             in_range("levels", l, 1, lgh_core::lighting_grid::MAX_LEVELS)?;
         }

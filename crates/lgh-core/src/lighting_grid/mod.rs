@@ -22,7 +22,10 @@
 //! Number of levels: the paper's rule (section 4.3), the largest l_max such that |S_1| < N/2,
 //! or a fixed count.
 
+pub mod descent;
 pub mod geometry;
+pub mod lookup;
+pub mod partition;
 pub mod reference;
 pub mod representative;
 pub mod splat;

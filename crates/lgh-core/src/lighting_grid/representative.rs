@@ -20,7 +20,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::{UVec3, Vec3};
 use rayon::prelude::*;
 
-use super::splat::{corner_weight, locate, locate_finer_vertex};
+use super::lookup::VertexLookup as Lookup;
+use super::splat::{corner_weight, locate_finer_vertex};
 use super::{Construction, InputLights, LightingGrid};
 use crate::color::luminance;
 use crate::rng::hash;
@@ -58,7 +59,8 @@ pub fn representatives(
     let keys: Vec<AtomicU64> = (0..grid.len() * SLOTS)
         .map(|_| AtomicU64::new(u64::MAX))
         .collect();
-    let grid = Lookup::new(grid);
+    let rows = super::lookup::VertexRows::new(grid);
+    let grid = Lookup::new(grid, &rows);
     // S_1 from the input lights, visited in cell-row order so that the vertices and slots
     // they update are near each other in memory (the result does not depend on the order).
     // Each entry carries what the offer needs (cell, fraction, luminance), so that the
@@ -109,7 +111,14 @@ pub fn representatives(
             });
         });
     };
-    for l in 2..=grid.grid.l_max() {
+    // Levels above S_1 only if some are asked for (the chain of the restriction needs every
+    // level below the ones it draws).
+    let top = if from_level > grid.grid.l_max() {
+        1
+    } else {
+        grid.grid.l_max()
+    };
+    for l in 2..=top {
         match construction {
             Construction::GatherFromS1 if l >= from_level => {
                 chain(l, 1, &|u| grid.locate(l, grid.grid.position[u]));
@@ -122,59 +131,6 @@ pub fn representatives(
         }
     }
     keys.into_iter().map(|k| unpack(k.into_inner())).collect()
-}
-
-/// A grid with, per level, where each vertex row (y, z) starts among the level's lights
-/// (which are in (z, y, x) order): a vertex is found by one table read and a search within
-/// its row (a few entries), instead of a binary search over the whole level, whose cache
-/// misses dominated the draw.
-struct Lookup<'a> {
-    grid: &'a LightingGrid,
-    /// Per level l (index l - 1): `(r + 1)^2 + 1` row starts, absolute light indices.
-    rows: Vec<Vec<u32>>,
-}
-
-impl<'a> Lookup<'a> {
-    fn new(grid: &'a LightingGrid) -> Self {
-        let rows = (1..=grid.l_max())
-            .into_par_iter()
-            .map(|l| {
-                let side = grid.geometry.cells_per_axis(l) as usize + 1;
-                let range = grid.level_range(l);
-                let mut start = vec![0u32; side * side + 1];
-                for v in &grid.vertex[range.clone()] {
-                    start[v.z as usize * side + v.y as usize + 1] += 1;
-                }
-                // Prefix sums: row k is then start[k]..start[k + 1].
-                let mut at = range.start as u32;
-                for s in &mut start {
-                    at += *s;
-                    *s = at;
-                }
-                start
-            })
-            .collect();
-        Self { grid, rows }
-    }
-
-    /// Cell and in-cell fraction of point `p` at level `l`.
-    fn locate(&self, l: u32, p: Vec3) -> (UVec3, Vec3) {
-        let geom = self.grid.geometry;
-        locate(p, geom.origin, geom.cell_size(l), geom.cells_per_axis(l))
-    }
-
-    /// Index of the light at vertex `v` of level `l`, if it has one.
-    #[inline]
-    fn find(&self, l: u32, v: UVec3) -> Option<usize> {
-        let side = self.grid.geometry.cells_per_axis(l) as usize + 1;
-        let rows = &self.rows[l as usize - 1];
-        let row = v.z as usize * side + v.y as usize;
-        let (a, b) = (rows[row] as usize, rows[row + 1] as usize);
-        self.grid.vertex[a..b]
-            .binary_search_by_key(&v.x, |u| u.x)
-            .ok()
-            .map(|k| a + k)
-    }
 }
 
 /// The representative packed in a key (its low 32 bits), or [`NONE`].

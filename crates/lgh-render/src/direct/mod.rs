@@ -36,7 +36,7 @@ use crate::denoise::atrous::{AtrousBuffers, AtrousParams, filter_ratio_pair_in_p
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::par_filled;
 use crate::progress::Progress;
-use crate::shading::ratio::ratio_of;
+use crate::shading::ratio::{RATIO_VISIBILITY, ratio_of};
 use crate::world::World;
 use crate::world::lights::LightSet;
 
@@ -363,7 +363,7 @@ pub fn render_direct(
         });
         timings.time("direct_composite", || {
             px.par_iter()
-                .zip(ratio_of(&s, &u))
+                .zip(ratio_of(&s, &u, RATIO_VISIBILITY))
                 .map(|(p, r)| p.base + p.analytic * r)
                 .collect()
         })

@@ -85,15 +85,37 @@ pub fn display_bytes(img: &Image, format: ImageFormat, exposure: f32) -> Vec<u8>
 /// # Errors
 /// The byte buffers do not hold `width` x `height` RGB pixels.
 pub fn flip_mean(a: &[u8], b: &[u8], width: u32, height: u32) -> Result<f64, String> {
+    let v = flip_map(a, b, width, height)?;
+    Ok(v.iter().map(|&x| f64::from(x)).sum::<f64>() / v.len() as f64)
+}
+
+/// NVIDIA's LDR-FLIP error per pixel (row-major, in [0, 1]) between two 8-bit sRGB pictures;
+/// see [`flip_mean`].
+///
+/// # Errors
+/// The byte buffers do not hold `width` x `height` RGB pixels.
+pub fn flip_map(a: &[u8], b: &[u8], width: u32, height: u32) -> Result<Vec<f32>, String> {
     let n = 3 * width as usize * height as usize;
     if a.len() != n || b.len() != n || n == 0 {
         return Err("FLIP needs two RGB images of the same, non-zero size".into());
     }
     let test = nv_flip::FlipImageRgb8::with_data(width, height, a);
     let reference = nv_flip::FlipImageRgb8::with_data(width, height, b);
-    let err = nv_flip::flip(reference, test, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
-    let v = err.to_vec();
-    Ok(v.iter().map(|&x| f64::from(x)).sum::<f64>() / v.len() as f64)
+    Ok(nv_flip::flip(reference, test, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec())
+}
+
+/// A FLIP error map as a picture: 8-bit sRGB through FLIP's own magma colour map (black: no
+/// error, yellow: as different as black and white).
+#[must_use]
+pub fn flip_picture(map: &[f32]) -> Vec<u8> {
+    let lut = nv_flip::magma_lut().to_vec();
+    let last = lut.len() / 3 - 1;
+    map.iter()
+        .flat_map(|&e| {
+            let k = ((e.clamp(0.0, 1.0) * last as f32) + 0.5) as usize;
+            [lut[3 * k], lut[3 * k + 1], lut[3 * k + 2]]
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -109,33 +109,29 @@ impl Image {
     /// # Errors
     /// Unknown extension, missing folder, or a write error.
     pub fn save(&self, path: &Path, exposure: f32) -> Result<(), ImageError> {
-        let format = ImageFormat::from_path(path)?;
-        check_output_dir(path)?;
-        let tmp = partial_path(path);
-        let result = match format {
+        match ImageFormat::from_path(path)? {
             ImageFormat::Png => {
                 let bytes = tonemap_to_srgb8(&self.pixels, exposure);
-                image::save_buffer_with_format(
-                    &tmp,
-                    &bytes,
-                    self.width,
-                    self.height,
-                    image::ExtendedColorType::Rgb8,
-                    image::ImageFormat::Png,
-                )
-                .map_err(|e| e.to_string())
+                save_png(path, self.width, self.height, &bytes)
             }
-            ImageFormat::Exr => exr::prelude::write_rgb_file(
-                &tmp,
-                self.width as usize,
-                self.height as usize,
-                |x, y| {
-                    let p = finite_or_zero(self.pixels[y * self.width as usize + x]);
-                    (p.x, p.y, p.z)
-                },
-            )
-            .map_err(|e| e.to_string()),
-        };
+            ImageFormat::Exr => self.save_exr(path),
+        }
+    }
+
+    /// Writes the image as a linear OpenEXR file (see [`Image::save`]).
+    fn save_exr(&self, path: &Path) -> Result<(), ImageError> {
+        check_output_dir(path)?;
+        let tmp = partial_path(path);
+        let result = exr::prelude::write_rgb_file(
+            &tmp,
+            self.width as usize,
+            self.height as usize,
+            |x, y| {
+                let p = finite_or_zero(self.pixels[y * self.width as usize + x]);
+                (p.x, p.y, p.z)
+            },
+        )
+        .map_err(|e| e.to_string());
         match result.and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string())) {
             Ok(()) => Ok(()),
             Err(e) => {
@@ -232,6 +228,30 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         .inspect_err(|_| {
             let _ = std::fs::remove_file(&tmp);
         })
+}
+
+/// Writes 8-bit sRGB `rgb` of `width` x `height` pixels as a PNG, whole or not at all (see
+/// [`Image::save`]).
+///
+/// # Errors
+/// Missing folder, a buffer of the wrong size, or a write error.
+pub fn save_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ImageError> {
+    check_output_dir(path)?;
+    let tmp = partial_path(path);
+    image::save_buffer_with_format(
+        &tmp,
+        rgb,
+        width,
+        height,
+        image::ExtendedColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| e.to_string())
+    .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()))
+    .map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        ImageError::new(path, format!("cannot write image: {e}"))
+    })
 }
 
 /// The temporary name of `path` while it is written: `.NAME.partial` beside it.

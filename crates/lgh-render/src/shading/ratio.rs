@@ -26,7 +26,20 @@ pub struct RatioFilter {
     /// Discontinuity-aware blur of A, S and U before the a-trous filter (interleaved
     /// sampling).
     pub interleave_blur: Option<BlurParams>,
+    /// Largest ratio D(S) / D(U): 1 where S estimates a visible part of U
+    /// ([`RATIO_VISIBILITY`]), more where it estimates a sum that A only approximates
+    /// ([`RATIO_CORRECTION`]).
+    pub max_ratio: f32,
+    /// The a-trous colour weight c_phi of the first pass.
+    pub c_phi: f32,
 }
+
+/// [`RatioFilter::max_ratio`] of a visibility ratio.
+pub const RATIO_VISIBILITY: f32 = 1.0;
+
+/// [`RatioFilter::max_ratio`] of `lgh`'s unbiased estimate, whose ratio also corrects the
+/// hierarchy's approximation A: a bound that only keeps runaway values out.
+pub const RATIO_CORRECTION: f32 = 16.0;
 
 /// What the shadow passes produce.
 #[derive(Clone, Debug, Default)]
@@ -63,15 +76,15 @@ impl ShadowRatio {
     }
 }
 
-/// S / U per channel, clamped to [0, 1]; 1 where U is zero.
+/// S / U per channel, clamped to [0, `max`]; 1 where U is zero.
 #[must_use]
-pub fn ratio_of(s: &[Vec3], u: &[Vec3]) -> Vec<Vec3> {
+pub fn ratio_of(s: &[Vec3], u: &[Vec3], max: f32) -> Vec<Vec3> {
     s.par_iter()
         .zip(u)
         .map(|(&s, &u)| {
             Vec3::select(
                 u.cmpgt(Vec3::splat(1e-20)),
-                (s / u).clamp(Vec3::ZERO, Vec3::ONE),
+                (s / u).clamp(Vec3::ZERO, Vec3::splat(max)),
                 Vec3::ONE,
             )
         })
@@ -130,10 +143,11 @@ pub fn shadowed_indirect(
     };
     let mut raw = Vec::new();
     let (s_f, u_f) = t.time("shadow_filter", || {
-        raw = ratio_of(&s_hat, &u_hat);
+        raw = ratio_of(&s_hat, &u_hat, settings.max_ratio);
         if settings.passes > 0 {
             let params = AtrousParams {
                 passes: settings.passes,
+                c_phi: settings.c_phi,
                 ..AtrousParams::lgh_defaults(world.radius)
             };
             let (mut s, mut u) = (s_hat, u_hat);
@@ -144,7 +158,7 @@ pub fn shadowed_indirect(
         }
     });
     let ratio = ShadowRatio {
-        filtered: ratio_of(&s_f, &u_f),
+        filtered: ratio_of(&s_f, &u_f, settings.max_ratio),
         raw,
     };
     let indirect = t.time("composite", || composite(g, &a, &ratio.filtered));

@@ -14,7 +14,7 @@ pub const MAX_SHADOW_SAMPLES: u32 = 16;
 
 /// A held shadow sample: the point the ray goes to, the normal its end is moved off the
 /// surface along (as for VPLs in the brute force), and the unshadowed contribution f.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadowSample {
     /// Shadow-ray target.
     pub q: Vec3,
@@ -27,6 +27,23 @@ pub struct ShadowSample {
     pub jitter: Vec3,
     /// Index of the light in the method's own list, for a target drawn after selection.
     pub light: u32,
+    /// Factor of the shadowed estimate per channel: S_k = V gain U_k (1 when S and U
+    /// estimate the same sum; `lgh`'s unbiased estimate sets it, docs/design.md, "Unbiased
+    /// estimate"). Zero: no ray, S_k = 0, U_k still counts.
+    pub gain: Vec3,
+}
+
+impl Default for ShadowSample {
+    fn default() -> Self {
+        Self {
+            q: Vec3::ZERO,
+            n: Vec3::ZERO,
+            f: Vec3::ZERO,
+            jitter: Vec3::ZERO,
+            light: 0,
+            gain: Vec3::ONE,
+        }
+    }
 }
 
 /// k reservoirs per pixel for a band of image rows, in one flat buffer (memory fixed at k

@@ -199,10 +199,14 @@ fn trace_band(
                     );
                     sample.q + t * sample.jitter
                 };
+                if sample.gain == Vec3::ZERO {
+                    u += u_k;
+                    continue;
+                }
                 let visible = !world.occluded_between(xp, ng, q, sample.n.normalize_or_zero());
                 u += u_k;
                 if visible {
-                    s += u_k;
+                    s += u_k * sample.gain;
                 }
             }
             (*s_px, *u_px) = (s / k as f32, u / k as f32);

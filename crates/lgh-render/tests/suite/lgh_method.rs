@@ -9,7 +9,7 @@ use lgh_core::vpl::GridEmission;
 use lgh_render::image::metrics::diff;
 use lgh_render::methods::brute::{BRUTE, BRUTE_UNSHADOWED};
 use lgh_render::methods::lgh::{
-    JitterAt, LGH, LGH_UNSHADOWED, LghSettings, LghStats, ShadowTarget,
+    Estimator, JitterAt, LGH, LGH_UNSHADOWED, LghSettings, LghStats, ShadowTarget,
 };
 use lgh_render::settings::{ShadowFilter, ShadowSettings, Tiling};
 use lgh_render::{Frame, Method, RenderSettings, World};
@@ -161,6 +161,7 @@ fn representative_shadow_targets_keep_the_brightness() {
         let lgh = LghSettings {
             shadow_target,
             jitter,
+            estimator: Estimator::Paper,
             ..LghSettings::default()
         };
         diff(&render(&world, LGH, 3000, lgh).image, &reference)
@@ -236,6 +237,7 @@ fn without_occluders_the_ratio_is_one_and_lgh_equals_lgh_unshadowed() {
             dev_scale: 0.0,
             shadow_from_level: 1,
             shadow_target,
+            estimator: Estimator::Paper,
             ..LghSettings::default()
         };
         let shadowed = render(&world, LGH, 3000, lgh.clone());

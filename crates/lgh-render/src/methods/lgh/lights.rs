@@ -5,10 +5,14 @@
 use glam::Vec3;
 use lgh_core::blending::LevelRole;
 use lgh_core::lighting_grid::representative::{NONE, SLOTS, representatives};
+use lgh_core::color::luminance;
+use lgh_core::lighting_grid::descent::Descent;
+use lgh_core::lighting_grid::lookup::{VertexLookup, VertexRows};
+use lgh_core::lighting_grid::partition::{Partition, ShadedLevels};
 use lgh_core::lighting_grid::{Construction, InputLights, LightingGrid};
 use lgh_core::reservoir::Reservoir;
 use lgh_core::rng::Rng;
-use lgh_core::vpl::{GridEmission, Vpls};
+use lgh_core::vpl::{GridEmission, Vpls, light_irradiance};
 use rayon::prelude::*;
 
 use crate::methods::lgh::light_batch::PackedLight;
@@ -37,6 +41,24 @@ pub(super) struct ShadeLights {
     /// The [`SLOTS`] representative VPLs of each light (shadow target `Representative`;
     /// empty otherwise).
     reps: Vec<RepSet>,
+    /// What the unbiased estimate needs of each hierarchy (empty for the paper's).
+    hierarchies: Vec<Hierarchy>,
+}
+
+/// One hierarchy as the unbiased estimate reads it (docs/design.md, "Unbiased estimate"):
+/// its centroids by vertex for Lambda_i, the children of its lights for the draw of an S_1
+/// light, and its VPLs' flux for their colour.
+struct Hierarchy {
+    /// The representatives of its S_1 lights (by grid index), and their VPLs' indices.
+    reps: Vec<RepSet>,
+    rep_vpl: Vec<u32>,
+    partition: Partition,
+    descent: Descent,
+    flux: Vec<Vec3>,
+    /// Index in [`ShadeLights`] of the hierarchy's first light.
+    first: usize,
+    /// Index in [`ShadeLights`] of its grid light 0 (after the VPLs if they are shaded).
+    grid_base: usize,
 }
 
 /// The [`SLOTS`] representative VPLs of one light, structure of arrays (positions and
@@ -60,12 +82,23 @@ impl RepSet {
         )
     }
 
-    /// Sets slot `s`.
+    /// Sets slot `s` to a VPL at `p` with normal `n`.
     fn set(&mut self, s: usize, p: Vec3, n: Vec3) {
         for a in 0..3 {
             self.position[a][s] = p[a];
             self.normal[a][s] = n[a];
         }
+    }
+
+    /// The representatives `slots` (VPL indices, [`NONE`] for an empty slot) of `vpls`.
+    fn of(slots: &[u32], vpls: &Vpls) -> Self {
+        let mut set = Self::default();
+        for (s, &r) in slots.iter().enumerate() {
+            if r != NONE {
+                set.set(s, vpls.positions[r as usize], vpls.normals[r as usize]);
+            }
+        }
+        set
     }
 
     /// [`representative_weight`] of every slot for the pixel at `x` with normal `n_x`.
@@ -166,16 +199,47 @@ impl ShadeLights {
                 }));
         }
         let first = grid.level_range(1).start;
-        self.reps
-            .extend(reps[SLOTS * first..].chunks(SLOTS).map(|slots| {
-                let mut set = RepSet::default();
-                for (s, &r) in slots.iter().enumerate() {
-                    if r != NONE {
-                        set.set(s, vpls.positions[r as usize], vpls.normals[r as usize]);
-                    }
-                }
-                set
-            }));
+        self.reps.extend(
+            reps[SLOTS * first..]
+                .chunks(SLOTS)
+                .map(|slots| RepSet::of(slots, vpls)),
+        );
+    }
+
+    /// Keeps what the unbiased estimate needs of `grid` (built from `vpls` by `construction`,
+    /// restriction or all-scatter), whose lights [`ShadeLights::add_hierarchy`] added from
+    /// index `first` with levels `levels`: the representatives of its S_1 lights (drawn with
+    /// `seed`), the children of its coarser lights and its centroids by vertex.
+    pub(super) fn add_unbiased(
+        &mut self,
+        grid: &LightingGrid,
+        vpls: &Vpls,
+        levels: ShadedLevels,
+        construction: Construction,
+        seed: u64,
+        first: usize,
+    ) {
+        let input = InputLights {
+            positions: &vpls.positions,
+            intensity: &vpls.flux,
+            normals: Some(&vpls.normals),
+        };
+        // S_1 only: the draw below a coarser light is made afresh per sample.
+        let slots = representatives(grid, &input, grid.l_max() + 1, construction, seed);
+        let s1 = grid.level_range(1);
+        let slots = &slots[SLOTS * s1.start..SLOTS * s1.end];
+        let reps = slots.par_chunks(SLOTS).map(|s| RepSet::of(s, vpls)).collect();
+        let rows = VertexRows::new(grid);
+        let vpl_lights = if levels.lowest == 0 { vpls.len() } else { 0 };
+        self.hierarchies.push(Hierarchy {
+            reps,
+            rep_vpl: slots.to_vec(),
+            partition: Partition::new(grid, levels),
+            descent: Descent::new(VertexLookup::new(grid, &rows)),
+            flux: vpls.flux.clone(),
+            first,
+            grid_base: first + vpl_lights,
+        });
     }
 
     /// Representative `s` of light `j`: its position and normal, or `None` for an empty slot.
@@ -217,6 +281,14 @@ impl ShadeLights {
     ) {
         let (xp, nx) = (g.position[i], g.normal[i]);
         let mut rng = Rng::new(&[seed, i as u64, STREAM_TARGET]);
+        if !self.hierarchies.is_empty() {
+            for r in reservoirs {
+                if let Some(sample) = r.sample.as_mut() {
+                    self.resolve_unbiased(sample, xp, nx, &mut rng, eps2);
+                }
+            }
+            return;
+        }
         for r in reservoirs {
             let Some(j) = r.sample.map(|s| s.light as usize) else {
                 continue;
@@ -231,19 +303,73 @@ impl ShadeLights {
                 r.sample = None;
                 continue;
             }
-            let mut u = rng.next_f32() * total;
-            let mut pick = SLOTS - 1;
-            for (s, &wt) in weights.iter().enumerate() {
-                if u < wt {
-                    pick = s;
-                    break;
-                }
-                u -= wt;
-            }
+            let pick = pick_weighted(&weights, total, rng.next_f32());
             if let Some(sample) = r.sample.as_mut() {
                 (sample.q, sample.n) = self.reps[j].get(pick);
             }
         }
+    }
+
+    /// Finishes a sample of the unbiased estimate (docs/design.md, "Unbiased estimate"): from
+    /// its light j (a VPL, or grid light g of some level) draws an S_1 light below it in
+    /// proportion to its share ([`Descent`]; j itself for S_1 and VPLs), one of that light's
+    /// representatives i in proportion to its unshadowed contribution rho_i at the pixel,
+    /// sets the ray's target to VPL i, and the gain S_k / U_k per unit visibility,
+    /// (sum rho / SLOTS) / (G_j Lambda_i) in the colour of VPL i: the ratio of the VPL's
+    /// share-weighted contribution, as a sample of the VPLs that j stands for, to j's own
+    /// contribution A_j = B_l I_j G_j / pi. The gain is zero if no representative lights
+    /// the pixel (U still counts the light: it is part of A).
+    fn resolve_unbiased(
+        &self,
+        sample: &mut ShadowSample,
+        xp: Vec3,
+        nx: Vec3,
+        rng: &mut Rng,
+        eps2: f32,
+    ) {
+        let j = sample.light as usize;
+        let h = &self.hierarchies[self.hierarchies.partition_point(|h| h.first <= j) - 1];
+        // No ray unless a VPL below j lights the pixel (U still counts j).
+        sample.gain = Vec3::ZERO;
+        // The VPL the ray goes to, as (position, normal, index), and sum rho / SLOTS.
+        let (q, nq, vpl, mean_rho) = if j < h.grid_base {
+            // A VPL shaded as S_0 stands for itself.
+            let (q, nq) = (self.position[j], self.normal[j]);
+            (q, nq, j - h.first, representative_weight(xp, nx, q, nq, eps2))
+        } else {
+            let u = h.descent.to_level_one(j - h.grid_base, || rng.next_f32());
+            let reps = &h.reps[u];
+            let weights = reps.weights(xp, nx, eps2);
+            let total: f32 = weights.iter().sum();
+            if total <= 0.0 {
+                return;
+            }
+            let pick = pick_weighted(&weights, total, rng.next_f32());
+            let (q, nq) = reps.get(pick);
+            let vpl = h.rep_vpl[SLOTS * u + pick] as usize;
+            (q, nq, vpl, total / SLOTS as f32)
+        };
+        if mean_rho <= 0.0 {
+            return;
+        }
+        let lambda = h.partition.blend_total(xp, q);
+        let geo = light_irradiance(
+            xp,
+            nx,
+            self.position[j],
+            self.normal[j],
+            self.iso[j],
+            Vec3::ONE,
+            eps2,
+        )
+        .x * std::f32::consts::PI;
+        if lambda <= 0.0 || geo <= 0.0 {
+            return;
+        }
+        let colour = chroma(h.flux[vpl]) / chroma(self.intensity[j]);
+        let colour = Vec3::select(colour.is_finite_mask(), colour, Vec3::ZERO);
+        (sample.q, sample.n) = (q, nq);
+        sample.gain = colour * (mean_rho / (geo * lambda));
     }
 
     /// The lights packed for the lighting loop, intensities times `scale`.
@@ -262,6 +388,23 @@ impl ShadeLights {
             })
             .collect()
     }
+}
+
+/// The index drawn from `weights` (summing to `total` > 0) with the uniform number `u`.
+fn pick_weighted(weights: &[f32; SLOTS], total: f32, u: f32) -> usize {
+    let mut u = u * total;
+    for (s, &wt) in weights.iter().enumerate() {
+        if u < wt {
+            return s;
+        }
+        u -= wt;
+    }
+    SLOTS - 1
+}
+
+/// An RGB value divided by its luminance (its colour at unit luminance).
+fn chroma(c: Vec3) -> Vec3 {
+    c / luminance(c)
 }
 
 /// The contribution at x (normal n_x) of a representative VPL at q (normal n_q) as a VPL

@@ -40,6 +40,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
+use lgh_core::lighting_grid::partition::ShadedLevels;
 use lgh_core::lighting_grid::{GridError, InputLights};
 use lgh_core::rng::Rng;
 use lgh_core::timing::Timings;
@@ -50,7 +51,7 @@ use crate::memory::FrameMemory;
 use crate::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
 use crate::passes::par_filled;
 use crate::settings::RenderError;
-use crate::shading::ratio::shadowed_indirect;
+use crate::shading::ratio::{RATIO_CORRECTION, RATIO_VISIBILITY, RatioFilter, shadowed_indirect};
 use crate::shading::reservoirs::{ReservoirLayout, ShadowReservoirs};
 use crate::shading::shadow_pass::ShadowPass;
 use crate::shading::tiles::InterleavedBins;
@@ -62,7 +63,7 @@ mod shade;
 
 use light_batch::LightBatch;
 use lights::{ShadeLights, split_by_normal};
-pub use settings::{JitterAt, LghSettings, ShadowTarget, auto_tile};
+pub use settings::{Estimator, JitterAt, LghSettings, ShadowTarget, auto_tile};
 use shade::{RowContext, shade_row};
 
 /// Random-stream tag of the grid offset of `--grid-jitter`.
@@ -178,6 +179,7 @@ pub fn render_lgh(
         vec![vpls]
     };
     let lowest = settings.start_level.min(1);
+    let unbiased = settings.estimator == Estimator::Unbiased;
     let n2 = (n * n) as usize;
     let scale = n2 as f32;
     let mut lights = ShadeLights::default();
@@ -197,18 +199,27 @@ pub fn render_lgh(
         let start = Instant::now();
         stats.grid_lights += grid.len();
         stats.levels = stats.levels.max(grid.l_max());
+        let first = lights.position.len();
         lights.add_hierarchy(grid, group, lowest, settings.alpha, settings.emission, n2);
         lighting_ms += start.elapsed().as_secs_f64() * 1e3;
         if k > 0 && settings.shadow_target == ShadowTarget::Representative {
             let start = Instant::now();
-            lights.add_representatives(
-                grid,
-                group,
-                lowest,
-                settings.shadow_from_level,
-                settings.construction,
-                seed,
-            );
+            if unbiased {
+                let levels = ShadedLevels {
+                    lowest,
+                    alpha: settings.alpha,
+                };
+                lights.add_unbiased(grid, group, levels, settings.construction, seed, first);
+            } else {
+                lights.add_representatives(
+                    grid,
+                    group,
+                    lowest,
+                    settings.shadow_from_level,
+                    settings.construction,
+                    seed,
+                );
+            }
             reps_ms += start.elapsed().as_secs_f64() * 1e3;
         }
     }
@@ -268,7 +279,14 @@ pub fn render_lgh(
         t.push("shadow_rays", times.rays_ms);
     }
     let a: Vec<Vec3> = shaded.par_iter().map(|p| p.0).collect();
-    let filter = all.ratio_filter(n);
+    let filter = RatioFilter {
+        max_ratio: if unbiased {
+            RATIO_CORRECTION
+        } else {
+            RATIO_VISIBILITY
+        },
+        ..all.ratio_filter(n)
+    };
     let shadowed = shadowed_indirect(world, g, a, estimates, &filter, &mut t, &mut memory.filter);
     stats.shadow_rays = shadowed.rays;
     Ok(MethodOutput {

@@ -54,6 +54,31 @@ pub struct LghSettings {
     /// centroid (the paper; centroids inside objects or walls darken the image).
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = LghSettings::default().shadow_target))]
     pub shadow_target: ShadowTarget,
+    /// lgh: what the shadow samples estimate. `unbiased` (the default; an extension): the
+    /// VPLs' own shadowed light, so that the ratio corrects the hierarchy's approximation as
+    /// well as visibility, every shaded level is a shadow candidate, and the image converges
+    /// to the brute force. `paper`: the grid lights' visibility only (section 3.3), biased by
+    /// the hierarchy's approximation (docs/design.md, "Unbiased estimate").
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = LghSettings::default().estimator))]
+    pub estimator: Estimator,
+}
+
+/// What the shadow samples of `lgh` estimate (docs/design.md, "Unbiased estimate").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum Estimator {
+    /// The paper (section 3.3): S and U estimate the grid lights' shadowed and unshadowed
+    /// sums, so indirect = A x D(S) / D(U) corrects visibility only, and keeps the error of
+    /// the hierarchy's approximation A. Candidates from `--shadow-from-level`.
+    Paper,
+    /// An extension: each sample goes on from the selected grid light to one of its VPLs,
+    /// drawn afresh per sample in proportion to its share, and S counts that VPL's own
+    /// contribution with its share of the blending weights normalised to one. S then
+    /// estimates the VPLs' shadowed sum without bias, and A x D(S) / D(U) converges to the
+    /// brute force. Every shaded level is a candidate. Needs the restriction or the
+    /// all-scatter construction.
+    Unbiased,
 }
 
 /// Where the shadow ray of a selected grid light goes (docs/design.md, "Shadow targets").
@@ -99,6 +124,38 @@ impl Default for LghSettings {
             emission: GridEmission::EnergyConserving,
             jitter: JitterAt::Ray,
             shadow_target: ShadowTarget::Representative,
+            estimator: Estimator::Unbiased,
+        }
+    }
+}
+
+impl LghSettings {
+    /// The lowest level whose lights are shadow candidates: every shaded level for the
+    /// unbiased estimate, `shadow_from_level` for the paper's.
+    #[must_use]
+    pub fn candidates_from(&self) -> u32 {
+        match self.estimator {
+            Estimator::Unbiased => self.start_level.min(1),
+            Estimator::Paper => self.shadow_from_level,
+        }
+    }
+
+    /// Why these settings cannot give the unbiased estimate, if they ask for it: it draws
+    /// its shadow targets among representatives when the rays are traced, and needs the
+    /// trilinear shares of the all-scatter hierarchy.
+    #[must_use]
+    pub fn unbiased_conflict(&self) -> Option<(&'static str, &'static str)> {
+        if self.estimator != Estimator::Unbiased {
+            return None;
+        }
+        if self.shadow_target != ShadowTarget::Representative {
+            Some(("shadow-target", "representative with --estimator unbiased (or --estimator paper)"))
+        } else if self.jitter != JitterAt::Ray {
+            Some(("jitter-at", "ray with --estimator unbiased (or --estimator paper)"))
+        } else if self.construction == Construction::GatherFromS1 {
+            Some(("construction", "restrict or scatter with --estimator unbiased (or --estimator paper)"))
+        } else {
+            None
         }
     }
 }

@@ -59,6 +59,7 @@ pub(super) fn shade_row(
         seed,
         ..
     } = *ctx;
+    let candidates_from = settings.candidates_from();
     let w = g.width as usize;
     let keys = bins.row_keys(y as u32, w as u32);
     for ((x, px), (phase, key)) in row.iter_mut().enumerate().zip(keys) {
@@ -94,7 +95,7 @@ pub(super) fn shade_row(
                 let e = chunk * LANES + lane;
                 let (j, l) = (batch.index[e] as usize, batch.level[e]);
                 *a += bc;
-                if k > 0 && l as u32 >= settings.shadow_from_level {
+                if k > 0 && l as u32 >= candidates_from {
                     let pl = &packed[j];
                     let (p, nj, iso, ij) = (pl.position, pl.normal, pl.iso, pl.intensity);
                     let b = || blend(pl.role, (p - xp).length(), pl.radius);
@@ -110,6 +111,7 @@ pub(super) fn shade_row(
                                 lights.deviation[j] * settings.dev_scale
                             },
                             light: j as u32,
+                            gain: Vec3::ONE,
                         },
                         (JitterAt::Candidate, true) => {
                             let s = rng.next_u32() as usize % SLOTS;
@@ -122,6 +124,7 @@ pub(super) fn shade_row(
                                 f: b() * light_irradiance(xp, n, q, nq, 0.0, ij, eps2),
                                 jitter: Vec3::ZERO,
                                 light: j as u32,
+                                gain: Vec3::ONE,
                             }
                         }
                         (JitterAt::Candidate, false) => {
@@ -138,6 +141,7 @@ pub(super) fn shade_row(
                                 f: b() * light_irradiance(xp, n, q, nj, iso, ij, eps2),
                                 jitter: Vec3::ZERO,
                                 light: j as u32,
+                                gain: Vec3::ONE,
                             }
                         }
                     };

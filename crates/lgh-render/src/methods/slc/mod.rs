@@ -301,6 +301,7 @@ pub fn render_slc(
                             f: c,
                             jitter: Vec3::ZERO,
                             light: j as u32,
+                            gain: Vec3::ONE,
                         };
                         offer(res, sample, luminance(c), &mut rng);
                     }
