@@ -11,9 +11,9 @@ use lgh_render::frame::render_frame_with;
 use lgh_render::image::ImageFormat;
 use lgh_render::image::metrics::{diff, display_bytes, flip_mean};
 use lgh_render::methods::brute::BRUTE;
-use lgh_render::methods::lgh::LGH;
+use lgh_render::methods::lgh::{Estimator, LGH, LghSettings};
 use lgh_render::methods::slc::{SLC, SLC_CLAMPED};
-use lgh_render::settings::{ShadowSettings, Tiling};
+use lgh_render::settings::ShadowSettings;
 use lgh_render::{Component, Frame, FrameMemory, Image, RenderSettings, Silent, World};
 
 use crate::bench_cmd::{BenchOptions, open_scene};
@@ -108,23 +108,32 @@ fn series(base: &RenderSettings) -> Vec<(&'static str, String, RenderSettings)> 
         ..ShadowSettings::default()
     };
     for k in [1, 4, 16] {
+        // The defaults: the unbiased estimate, alpha 4, the VPLs near the pixel, 4 x 4.
         let lgh = RenderSettings {
             method: LGH,
             shadows: shadows(k),
             ..base.clone()
         };
-        let mut alpha2 = lgh.clone();
-        alpha2.lgh.alpha = 2.0;
-        let il4 = RenderSettings {
-            tiling: Tiling {
-                interleave: Some(4),
-                ..Tiling::default()
-            },
-            ..lgh.clone()
+        let mut plain = lgh.clone();
+        plain.tiling.interleave = Some(1);
+        // The paper: alpha 1 (and 2), S_1 first, candidates from S_2, no interleaving.
+        let mut paper = lgh.clone();
+        paper.lgh = LghSettings {
+            estimator: Estimator::Paper,
+            alpha: 1.0,
+            start_level: 1,
+            ..LghSettings::default()
         };
+        paper.tiling.interleave = Some(1);
+        let mut paper2 = paper.clone();
+        paper2.lgh.alpha = 2.0;
+        let mut paper4 = paper.clone();
+        paper4.tiling.interleave = Some(4);
         out.push(("lgh", format!("k={k}"), lgh));
-        out.push(("lgh alpha 2", format!("k={k}"), alpha2));
-        out.push(("lgh 4x4", format!("k={k}"), il4));
+        out.push(("lgh 1x1", format!("k={k}"), plain));
+        out.push(("lgh paper", format!("k={k}"), paper));
+        out.push(("lgh paper alpha 2", format!("k={k}"), paper2));
+        out.push(("lgh paper 4x4", format!("k={k}"), paper4));
     }
     let bounds = [
         ("slc", SLC, [0.01f32, 0.002, 0.0005]),
@@ -295,6 +304,65 @@ pub fn run(args: &QualityBenchArgs) -> Result<()> {
             p.scene, p.series, p.setting, p.ms, p.rel_rmse, p.flip, p.rel_bias
         );
     }
+    println!();
+    println!("At the defaults (lgh k=4, slc eb=0.0005):");
+    println!(
+        "{:<14} {:>9} {:>9} {:>7} {:>9} {:>9} {:>7}  lgh wins",
+        "scene", "lgh FLIP", "bias", "ms", "slc FLIP", "bias", "ms"
+    );
+    for row in summary(&points) {
+        println!(
+            "{:<14} {:>9.4} {:>+9.4} {:>7.0} {:>9.4} {:>+9.4} {:>7.0}  {}",
+            row.scene,
+            row.lgh.flip,
+            row.lgh.rel_bias,
+            row.lgh.ms,
+            row.slc.flip,
+            row.slc.rel_bias,
+            row.slc.ms,
+            if row.lgh_wins() { "yes" } else { "no" }
+        );
+    }
     println!("plot: {}", args.plot.display());
     Ok(())
+}
+
+/// lgh against slc on one scene, both at their defaults.
+struct SummaryRow<'a> {
+    scene: &'a str,
+    lgh: &'a Point,
+    slc: &'a Point,
+}
+
+impl SummaryRow<'_> {
+    /// FLIP no higher than slc's in no more time.
+    fn lgh_wins(&self) -> bool {
+        self.lgh.flip <= self.slc.flip && self.lgh.ms <= self.slc.ms
+    }
+}
+
+/// The default settings' points of every scene (lgh with k = 4, slc with its default bound).
+fn summary(points: &[Point]) -> Vec<SummaryRow<'_>> {
+    let find = |scene: &str, series: &str, setting: &str| {
+        points
+            .iter()
+            .find(|p| p.scene == scene && p.series == series && p.setting == setting)
+    };
+    let mut rows: Vec<SummaryRow> = Vec::new();
+    for p in points {
+        if rows.iter().any(|r| r.scene == p.scene) {
+            continue;
+        }
+        if let (Some(lgh), Some(slc)) = (
+            find(&p.scene, "lgh", "k=4"),
+            find(&p.scene, "slc", "eb=0.0005"),
+        ) {
+            rows.push(SummaryRow {
+                scene: &p.scene,
+                lgh,
+                slc,
+            });
+        }
+    }
+    rows
 }

@@ -41,6 +41,25 @@ pub fn frame_settings(s: &RenderSettings, k: u32, frames: u32) -> RenderSettings
     f
 }
 
+/// The settings of frame `k` of an accumulation of `frames` frames: [`frame_settings`], and
+/// filters that shrink as the frames grow, so that the mean converges to the brute force:
+/// the shadow ratio's a-trous filter keeps at most max(1, 5 - log2(frames)) passes (the
+/// last, 5 x 5 pixels, keeps the noise of single samples from dominating), and `lgh` does without interleaving unless it is asked for (its blur of the
+/// unshadowed sum A, 17 pixels wide, is a bias that no number of frames removes;
+/// docs/design.md, "Accumulation").
+#[must_use]
+pub fn accumulation_settings(s: &RenderSettings, k: u32, frames: u32) -> RenderSettings {
+    let mut f = frame_settings(s, k, frames);
+    if frames > 1 {
+        let passes = 5u32.saturating_sub(frames.ilog2()).max(1);
+        f.shadows.filter_passes = f.shadows.filter_passes.min(passes);
+        if f.method.name().starts_with("lgh") {
+            f.tiling.interleave = Some(f.tiling.interleave.unwrap_or(1));
+        }
+    }
+    f
+}
+
 /// Renders `frames` frames of `world` (at least one) and returns their mean: `image`,
 /// `direct` and `indirect` are averaged, `timings` summed per pass, and the rest is the last
 /// frame's (the method's per-pixel outputs of one frame are dropped, being of one frame
@@ -58,7 +77,7 @@ pub fn render_accumulated(
     let frames = frames.max(1);
     let inner: &dyn Progress = if frames > 1 { &Silent } else { progress };
     progress.begin("frames", u64::from(frames));
-    let mut f = render_frame_with(world, &frame_settings(s, 0, frames), inner, memory)?;
+    let mut f = render_frame_with(world, &accumulation_settings(s, 0, frames), inner, memory)?;
     progress.advance(1);
     let mut sums = [
         f.image.pixels.clone(),
@@ -66,7 +85,7 @@ pub fn render_accumulated(
         f.indirect.pixels.clone(),
     ];
     for k in 1..frames {
-        let next = render_frame_with(world, &frame_settings(s, k, frames), inner, memory)?;
+        let next = render_frame_with(world, &accumulation_settings(s, k, frames), inner, memory)?;
         for (acc, p) in sums
             .iter_mut()
             .zip([&next.image, &next.direct, &next.indirect])

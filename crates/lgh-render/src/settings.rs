@@ -103,7 +103,7 @@ impl ShadowSettings {
 pub struct Tiling {
     /// lgh, slc: n x n interleaved sampling: each of the n^2 sub-images shades 1/n^2 of the
     /// lights (of each level, for lgh), then a discontinuity-aware blur recombines them.
-    /// Default: 1 (none) for lgh, 8 for slc (the papers' settings).
+    /// Default: 4 for lgh (the paper: none), 8 for slc (the paper's).
     #[cfg_attr(feature = "clap", arg(long))]
     pub interleave: Option<u32>,
     /// lgh, slc: screen tile edge in sub-image pixels for light binning. Default: 16
@@ -448,7 +448,7 @@ mod tests {
         let s = ShadowSettings {
             samples: 40,
             filter: ShadowFilter::None,
-            filter_passes: 5,
+            ..ShadowSettings::default()
         };
         assert_eq!(s.k(true), MAX_SHADOW_SAMPLES as usize);
         assert_eq!(s.k(false), 0);

@@ -187,7 +187,7 @@ impl ViewState {
                 Some(format!("alpha: {}", s.lgh.alpha))
             }
             Action::NextInterleave => {
-                let n = match s.tiling.interleave.unwrap_or(1) {
+                let n = match s.tiling.interleave.unwrap_or(lgh::DEFAULT_INTERLEAVE) {
                     1 => 2,
                     2 => 4,
                     _ => 1,
@@ -309,9 +309,10 @@ mod tests {
         }
         assert_eq!(v.settings.lgh.alpha, 8.0);
         assert_eq!(v.settings.vpls, 1_000_000);
+        // From the default 4 x 4: none, then 2 x 2.
         v.apply(Action::NextInterleave);
         v.apply(Action::NextInterleave);
-        assert_eq!(v.settings.tiling.interleave, Some(4));
+        assert_eq!(v.settings.tiling.interleave, Some(2));
         assert!(v.settings.validate().is_ok());
     }
 

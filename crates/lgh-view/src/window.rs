@@ -141,7 +141,9 @@ fn title(f: &ShownFrame, s: &crate::state::ViewState) -> String {
         f.ms,
         st.method.name(),
         st.lgh.alpha,
-        st.tiling.interleave.unwrap_or(1),
+        st.tiling
+            .interleave
+            .unwrap_or(lgh_render::methods::lgh::DEFAULT_INTERLEAVE),
         st.shadows.samples,
         f.vpls,
         f.grid_lights

@@ -440,8 +440,10 @@ fn accumulate_and_bench_quality() {
     let points = v["points"].as_array().unwrap();
     for series in [
         "lgh",
-        "lgh alpha 2",
-        "lgh 4x4",
+        "lgh 1x1",
+        "lgh paper",
+        "lgh paper alpha 2",
+        "lgh paper 4x4",
         "slc",
         "slc-clamped",
         "lgh --accumulate",

@@ -193,18 +193,48 @@ impl Partition {
             // at once without branches (as `LightBatch` evaluates lights).
             let mut q = [[0.0f32; 8]; 3];
             let mut w = [0.0f32; 8];
-            for corner in 0..8usize {
-                let d = UVec3::new(
-                    corner as u32 & 1,
-                    (corner as u32 >> 1) & 1,
-                    corner as u32 >> 2,
-                );
-                let found = self.centroid(l, c + d);
+            let (wx, wy, wz) = ([1.0 - f.x, f.x], [1.0 - f.y, f.y], [1.0 - f.z, f.z]);
+            let mut put = |corner: usize, found: Option<Vec3>| {
                 let p = found.unwrap_or(x);
                 if found.is_some() {
-                    w[corner] = weight(f.x, d.x) * weight(f.y, d.y) * weight(f.z, d.z);
+                    w[corner] = wx[corner & 1] * wy[(corner >> 1) & 1] * wz[corner >> 2];
                 }
                 (q[0][corner], q[1][corner], q[2][corner]) = (p.x, p.y, p.z);
+            };
+            match self.centroids.get(l as usize - 1) {
+                Some(Centroids::Dense(table)) => {
+                    // The cell's corners are 8 fixed offsets from its first (c + 1 <= r,
+                    // inside the table).
+                    let side = geom.cells_per_axis(l) as usize + 1;
+                    let base = (c.z as usize * side + c.y as usize) * side + c.x as usize;
+                    let plane = side * side;
+                    let offsets = [
+                        0,
+                        1,
+                        side,
+                        side + 1,
+                        plane,
+                        plane + 1,
+                        plane + side,
+                        plane + side + 1,
+                    ];
+                    for (corner, &o) in offsets.iter().enumerate() {
+                        put(
+                            corner,
+                            table.get(base + o).copied().filter(|q| !q.x.is_nan()),
+                        );
+                    }
+                }
+                _ => {
+                    for corner in 0..8usize {
+                        let d = UVec3::new(
+                            corner as u32 & 1,
+                            (corner as u32 >> 1) & 1,
+                            corner as u32 >> 2,
+                        );
+                        put(corner, self.centroid(l, c + d));
+                    }
+                }
             }
             let inv_r = 1.0 / r;
             let (rise_off, fall_off) = match role {
@@ -226,12 +256,6 @@ impl Partition {
         }
         total
     }
-}
-
-/// The trilinear weight factor of one axis: f towards the far corner, 1 - f towards the near.
-#[inline]
-fn weight(f: f32, far: u32) -> f32 {
-    if far == 1 { f } else { 1.0 - f }
 }
 
 #[cfg(test)]

@@ -239,8 +239,28 @@ pub fn blur_n<const N: usize>(
     // leaves the image, crosses a jump along its axis, or enters a pixel that sees nothing. Known before the sums, the taps need no tests.
     let (right, left) = runs(g, disc, r, false);
     let (down, up) = runs(g, disc, r, true);
-    let full_sum: f32 = weights[0] + 2.0 * weights[1..].iter().sum::<f32>();
     let phases = (p.phases as usize).clamp(1, MAX_PHASES);
+    // A full walk covers every phase, but the Gaussian need not weigh them alike (at n = 8,
+    // sigma 3, from 0.82 to 1.06: the 8 x 8 pattern of the sub-images shows through). Its
+    // weights are divided by their phase's total, so that every sub-image counts equally
+    // (at n = 4 they already agree within 0.6%).
+    let full_weights: Vec<f32> = if phases > 1 {
+        let mut total = vec![0.0f32; phases];
+        for (k, &wk) in weights.iter().enumerate() {
+            total[k % phases] += wk;
+            if k > 0 {
+                total[(phases - k % phases) % phases] += wk;
+            }
+        }
+        weights
+            .iter()
+            .enumerate()
+            .map(|(k, &wk)| wk / total[k % phases])
+            .collect()
+    } else {
+        weights.clone()
+    };
+    let full_sum: f32 = full_weights[0] + 2.0 * full_weights[1..].iter().sum::<f32>();
     // One pass: out[i] = the weighted mean of src over the walk from i (stride `step`).
     let pass = |src: &[Vec3], out: &mut [Vec3], step: usize, fwd: &[u8], back: &[u8]| {
         let flat: &[f32] = bytemuck::cast_slice(src);
@@ -267,7 +287,7 @@ pub fn blur_n<const N: usize>(
                             bytemuck::cast_slice_mut(&mut out_row[x..end]),
                             3 * (row + x),
                             3 * step,
-                            &weights,
+                            &full_weights,
                             1.0 / full_sum,
                         );
                         x = end;

@@ -23,9 +23,10 @@ fn accumulated(world: &World, method: lgh_render::Method, vpls: usize, n: u32) -
 /// The brute force accumulated over N frames of 500 VPLs is the brute force over their
 /// union: its error against a 16,000-VPL brute force falls like 1 / sqrt(N) (VPL noise);
 /// asserted: N = 16 at most 0.4 of N = 1 (1 / sqrt(16) = 0.25, plus the reference's own
-/// noise). And `lgh` accumulated over N frames comes closer to the brute force accumulated
-/// over the same N: N = 16 below 0.8 of N = 1 (measured 0.77 at 64x36: the part of the error that
-/// averages away is the VPL and shadow noise; the hierarchy's bias stays).
+/// noise). And `lgh` accumulated over N frames converges to the brute force accumulated over
+/// the same N (its estimate is unbiased, and the filters shrink as N grows): rel_rmse at
+/// N = 16 below 0.3 of N = 1 and below 0.08 (the quality issue's target; measured 0.37 ->
+/// 0.040 at 64x36 with 2000 VPLs a frame).
 #[test]
 fn accumulation_converges() {
     let world = common::cornell_world();
@@ -46,9 +47,9 @@ fn accumulation_converges() {
         .unwrap()
         .rel_rmse
     };
-    let (l1, l8) = (lgh(1), lgh(16));
-    eprintln!("lgh vs brute, both accumulated: N=1 {l1}, N=16 {l8}");
-    assert!(l8 < 0.8 * l1, "{l1} -> {l8}");
+    let (l1, l16) = (lgh(1), lgh(16));
+    eprintln!("lgh vs brute, both accumulated: N=1 {l1}, N=16 {l16}");
+    assert!(l16 < 0.3 * l1 && l16 < 0.08, "{l1} -> {l16}");
 }
 
 /// One accumulated frame is the plain render, and the mean is the same with 1 and 2

@@ -152,6 +152,26 @@ pub fn small_indirect(method: lgh_render::Method, vpls: usize) -> lgh_render::Re
     }
 }
 
+/// The paper's LGH (Lin & Yuksel 2019): its shadow estimate, alpha 1, S_1 the lowest level
+/// shaded (the project's defaults differ; docs/design.md, "Defaults"); with
+/// [`no_interleave`] its tiling.
+pub fn paper_lgh() -> lgh_render::methods::lgh::LghSettings {
+    lgh_render::methods::lgh::LghSettings {
+        estimator: lgh_render::methods::lgh::Estimator::Paper,
+        alpha: 1.0,
+        start_level: 1,
+        ..Default::default()
+    }
+}
+
+/// No interleaved sampling (the paper's default; the project's `lgh` interleaves 4 x 4).
+pub fn no_interleave() -> lgh_render::settings::Tiling {
+    lgh_render::settings::Tiling {
+        interleave: Some(1),
+        ..Default::default()
+    }
+}
+
 /// Renders a frame on the global pool.
 pub fn render(world: &lgh_render::World, s: &lgh_render::RenderSettings) -> lgh_render::Frame {
     lgh_render::render_frame(world, s, &lgh_render::Silent).expect("render")

@@ -9,7 +9,7 @@ use lgh_core::vpl::GridEmission;
 use lgh_render::image::metrics::diff;
 use lgh_render::methods::brute::{BRUTE, BRUTE_UNSHADOWED};
 use lgh_render::methods::lgh::{
-    Estimator, JitterAt, LGH, LGH_UNSHADOWED, LghSettings, LghStats, ShadowTarget,
+    JitterAt, LGH, LGH_UNSHADOWED, LghSettings, LghStats, ShadowTarget,
 };
 use lgh_render::settings::{ShadowFilter, ShadowSettings, Tiling};
 use lgh_render::{Frame, Method, RenderSettings, World};
@@ -30,7 +30,8 @@ fn rel_rmse(world: &World, reference: &lgh_render::Image, method: Method, lgh: L
         .rel_rmse
 }
 
-/// The indirect light of `method` with `lgh` (48x32, `vpls` VPLs, default shadows).
+/// The indirect light of `method` with `lgh` (48x32, `vpls` VPLs, default shadows, no
+/// interleaving).
 fn render(world: &World, method: Method, vpls: usize, lgh: LghSettings) -> Frame {
     render_with(world, method, vpls, lgh, ShadowSettings::default())
 }
@@ -46,6 +47,8 @@ fn render_with(
     let s = RenderSettings {
         lgh,
         shadows,
+        // The paper's properties are tested one pixel at a time, without interleaving.
+        tiling: common::no_interleave(),
         ..common::small_indirect(method, vpls)
     };
     common::render(world, &s)
@@ -123,7 +126,7 @@ fn shadow_estimate_converges_to_brute_force_when_the_hierarchy_is_exact() {
         alpha: 1e5,
         start_level: 0,
         shadow_from_level: 0,
-        ..LghSettings::default()
+        ..common::paper_lgh()
     };
     let sixteen = ShadowSettings {
         samples: 16,
@@ -161,8 +164,7 @@ fn representative_shadow_targets_keep_the_brightness() {
         let lgh = LghSettings {
             shadow_target,
             jitter,
-            estimator: Estimator::Paper,
-            ..LghSettings::default()
+            ..common::paper_lgh()
         };
         diff(&render(&world, LGH, 3000, lgh).image, &reference)
             .unwrap()
@@ -237,8 +239,7 @@ fn without_occluders_the_ratio_is_one_and_lgh_equals_lgh_unshadowed() {
             dev_scale: 0.0,
             shadow_from_level: 1,
             shadow_target,
-            estimator: Estimator::Paper,
-            ..LghSettings::default()
+            ..common::paper_lgh()
         };
         let shadowed = render(&world, LGH, 3000, lgh.clone());
         let unshadowed = render(&world, LGH_UNSHADOWED, 3000, lgh);
@@ -453,7 +454,7 @@ fn normal_bins_reduce_the_error_of_the_hierarchy() {
             alpha: 2.0,
             normal_bins,
             emission: GridEmission::MeanNormal,
-            ..LghSettings::default()
+            ..common::paper_lgh()
         };
         rel_rmse(&world, &reference, LGH_UNSHADOWED, lgh)
     };
@@ -473,7 +474,7 @@ fn energy_conserving_emission_keeps_the_brightness() {
     let bias = |emission: GridEmission| {
         let lgh = LghSettings {
             emission,
-            ..LghSettings::default()
+            ..common::paper_lgh()
         };
         diff(&render(&world, LGH_UNSHADOWED, 4000, lgh).image, &reference)
             .unwrap()

@@ -15,4 +15,5 @@ mod pt_method;
 mod sequence;
 mod shared_scenes;
 mod slc_method;
+mod unbiased;
 mod vpl_energy;

@@ -1,8 +1,8 @@
 //! Rendering with the lighting grid hierarchy (Lin & Yuksel 2019, sections 3.2, 3.3, 4.1).
 //!
 //! 1. **Hierarchy** of the VPLs ([`lgh_core::lighting_grid`], section 3.1).
-//! 2. **Lighting computation** (3.2): the grid lights of levels l_min..=l_max (l_min = 1 by
-//!    default, 4.1; 0 adds the VPLs themselves as S_0 with h_0 = h_1 / 2) are binned into
+//! 2. **Lighting computation** (3.2): the grid lights of levels l_min..=l_max (l_min = 0 by
+//!    default, the VPLs themselves as S_0 with h_0 = h_1 / 2; the paper's 1, 4.1) are binned into
 //!    screen tiles as spheres of radius 2 r_l, r_l = alpha h_l (the top level covers the whole
 //!    screen), the CPU counterpart of rasterising light volumes. Each pixel x sums, over its
 //!    tile's lights j, B_l(d_j) x Phi_j e_j(w) max(0, n_x . w) / (pi (d^2 + eps^2))
@@ -15,18 +15,26 @@
 //!    sub-image's lights with n^2 times their intensity, and A, S and U are recombined by the
 //!    discontinuity-aware blur of [`crate::shading::interleave`] before the shadow filter.
 //! 3. **Shadow sample selection** (3.3, Appendix A): while shading, each pixel keeps k
-//!    single-slot reservoirs; every light of level >= the shadow level (2 by default, 4.1,
-//!    Fig. 3) is offered with weight f_j = luminance of its unshadowed contribution at its
-//!    shadow target q. By default q is one of the VPLs the light stands for, drawn in
-//!    proportion to its share ([`ShadowTarget::Representative`], an extension that removes
-//!    the darkening of centroids inside objects); the paper's target is the centroid jittered
-//!    by its deviation (q = p_j + 0.5 t * deviation, t raised-cosine per axis; docs/design.md,
-//!    "Shadow targets").
-//! 4. **Shadow rays and the ratio estimator** (Heitz et al. 2018): one ray per reservoir;
-//!    U_k = f^ f_j / lum(f_j) (an unbiased estimate of the candidates' sum), S_k = V U_k;
-//!    both are averaged over k, filtered by the same edge-avoiding a-trous filter
-//!    ([`crate::denoise::atrous`]), and indirect = albedo / pi x A x D(S) / D(U) per channel
-//!    (ratio 1 where D(U) is zero).
+//!    single-slot reservoirs; every candidate light is offered with weight f_j = luminance
+//!    of its unshadowed contribution. With the unbiased estimate (the default,
+//!    [`Estimator::Unbiased`]) every shaded level is a candidate; with the paper's, levels
+//!    >= the shadow level (2 by default, 4.1, Fig. 3).
+//! 4. **Shadow targets.** Unbiased estimate: each selected light walks down the levels to an
+//!    S_1 light, drawn afresh per sample in proportion to its share
+//!    ([`lgh_core::lighting_grid::descent`]), and one of that light's representative VPLs
+//!    is picked by its contribution; the sample's S counts that VPL's own contribution with
+//!    its blending share normalised to one ([`lgh_core::lighting_grid::partition`];
+//!    docs/design.md, "Unbiased estimate"). Paper estimate: the target is one of the
+//!    per-frame representatives of the light ([`ShadowTarget::Representative`], an
+//!    extension that removes the darkening of centroids inside objects) or the paper's
+//!    centroid jittered by its deviation (q = p_j + 0.5 t * deviation, t raised-cosine per
+//!    axis; docs/design.md, "Shadow targets").
+//! 5. **Shadow rays and the ratio estimator** (Heitz et al. 2018): one ray per reservoir;
+//!    U_k = f^ f_j / lum(f_j) (an unbiased estimate of the candidates' sum A), S_k =
+//!    V gain U_k (gain 1 for the paper's estimate, which then estimates the grid lights'
+//!    shadowed sum; the VPLs' for the unbiased one); both are averaged over k, filtered by
+//!    the same edge-avoiding a-trous filter ([`crate::denoise::atrous`]), and indirect =
+//!    albedo / pi x A x D(S) / D(U) per channel (ratio 1 where D(U) is zero).
 //!
 //! | file | concept |
 //! | --- | --- |
@@ -63,7 +71,9 @@ mod shade;
 
 use light_batch::LightBatch;
 use lights::{ShadeLights, split_by_normal};
-pub use settings::{Estimator, JitterAt, LghSettings, ShadowTarget, auto_tile};
+pub use settings::{
+    DEFAULT_INTERLEAVE, Estimator, JitterAt, LghSettings, ShadowTarget, auto_tile,
+};
 use shade::{RowContext, shade_row};
 
 /// Random-stream tag of the grid offset of `--grid-jitter`.
@@ -155,7 +165,7 @@ pub fn render_lgh(
     let mut t = Timings::default();
     let n_px = g.len();
     let k = all.shadows.k(shadowed);
-    let n = all.tiling.interleave.unwrap_or(1).max(1);
+    let n = all.tiling.interleave.unwrap_or(DEFAULT_INTERLEAVE).max(1);
     let mut stats = LghStats {
         alpha: settings.alpha,
         shadow_samples: k as u32,

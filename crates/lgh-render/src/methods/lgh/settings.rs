@@ -1,5 +1,5 @@
 //! Settings of the LGH method, with its choices where the paper is silent
-//! (docs/design.md, "LGH: choices beyond the paper").
+//! (docs/design.md, "Defaults" and the sections it names).
 
 use lgh_core::lighting_grid::{Construction, LevelCount};
 use lgh_core::vpl::GridEmission;
@@ -10,7 +10,8 @@ use lgh_core::vpl::GridEmission;
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct LghSettings {
-    /// lgh: alpha of the blending radii r_l = alpha h_l (larger = more accurate, slower).
+    /// lgh: alpha of the blending radii r_l = alpha h_l (larger = more accurate, slower; the
+    /// paper uses 1).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = LghSettings::default().alpha))]
     pub alpha: f32,
     /// lgh: number of hierarchy levels, `auto` (largest with |S1| < VPLs/2) or 1..=10.
@@ -20,7 +21,8 @@ pub struct LghSettings {
     /// the VPLs when --start-level is 0).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = LghSettings::default().shadow_from_level))]
     pub shadow_from_level: u32,
-    /// lgh: lowest level shaded: 1 (S1, the paper's default) or 0 (the VPLs themselves).
+    /// lgh: lowest level shaded: 0 (the VPLs themselves near the pixel, the default) or 1
+    /// (S1, the paper's default).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = LghSettings::default().start_level))]
     pub start_level: u32,
     /// Scale of the jitter of centroid shadow targets (the authors' DevScale).
@@ -113,10 +115,10 @@ pub enum JitterAt {
 impl Default for LghSettings {
     fn default() -> Self {
         Self {
-            alpha: 1.0,
+            alpha: 4.0,
             levels: LevelCount::Auto,
             shadow_from_level: 2,
-            start_level: 1,
+            start_level: 0,
             dev_scale: 0.5,
             construction: Construction::Restrict,
             normal_bins: false,
@@ -159,6 +161,10 @@ impl LghSettings {
         }
     }
 }
+
+/// The default n of n x n interleaved sampling for `lgh`: 4 (an extension of the paper's
+/// default, none; docs/design.md, "Defaults").
+pub const DEFAULT_INTERLEAVE: u32 = 4;
 
 /// The default tile edge, in sub-image pixels, for n x n interleaving: 16 full-resolution
 /// pixels (16 / n sub-image pixels, at least 4). A sub-image tile of 16 sub-image pixels
