@@ -19,6 +19,17 @@ pub struct Vpls {
 }
 
 impl Vpls {
+    /// The VPLs as the input lights of a lighting grid hierarchy (oriented, intensity =
+    /// flux).
+    #[must_use]
+    pub fn as_input(&self) -> crate::lighting_grid::InputLights<'_> {
+        crate::lighting_grid::InputLights {
+            positions: &self.positions,
+            intensity: &self.flux,
+            normals: Some(&self.normals),
+        }
+    }
+
     /// An empty set with room for `n` VPLs.
     #[must_use]
     pub fn with_capacity(n: usize) -> Self {

@@ -9,7 +9,7 @@ use lgh_core::color::luminance;
 use lgh_core::lighting_grid::descent::Descent;
 use lgh_core::lighting_grid::lookup::{VertexLookup, VertexRows};
 use lgh_core::lighting_grid::partition::{Partition, ShadedLevels};
-use lgh_core::lighting_grid::{Construction, InputLights, LightingGrid};
+use lgh_core::lighting_grid::{Construction, LightingGrid};
 use lgh_core::reservoir::Reservoir;
 use lgh_core::rng::Rng;
 use lgh_core::vpl::{GridEmission, Vpls, light_irradiance};
@@ -181,12 +181,7 @@ impl ShadeLights {
         construction: Construction,
         seed: u64,
     ) {
-        let input = InputLights {
-            positions: &vpls.positions,
-            intensity: &vpls.flux,
-            normals: Some(&vpls.normals),
-        };
-        let reps = representatives(grid, &input, from_level, construction, seed);
+        let reps = representatives(grid, &vpls.as_input(), from_level, construction, seed);
         if lowest == 0 {
             // A VPL stands for itself.
             self.reps
@@ -219,12 +214,8 @@ impl ShadeLights {
         seed: u64,
         first: usize,
     ) {
-        let input = InputLights {
-            positions: &vpls.positions,
-            intensity: &vpls.flux,
-            normals: Some(&vpls.normals),
-        };
         // S_1 only: the draw below a coarser light is made afresh per sample.
+        let input = vpls.as_input();
         let slots = representatives(grid, &input, grid.l_max() + 1, construction, seed);
         let s1 = grid.level_range(1);
         let slots = &slots[SLOTS * s1.start..SLOTS * s1.end];

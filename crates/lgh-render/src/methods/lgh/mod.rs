@@ -49,7 +49,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 use lgh_core::lighting_grid::partition::ShadedLevels;
-use lgh_core::lighting_grid::{GridError, InputLights};
+use lgh_core::lighting_grid::GridError;
 use lgh_core::rng::Rng;
 use lgh_core::timing::Timings;
 use lgh_core::vpl::Vpls;
@@ -197,11 +197,7 @@ pub fn render_lgh(
     let mut lighting_ms = 0.0;
     let mut reps_ms = 0.0;
     for group in groups.iter().filter(|g| !g.is_empty()) {
-        let input = InputLights {
-            positions: &group.positions,
-            intensity: &group.flux,
-            normals: Some(&group.normals),
-        };
+        let input = group.as_input();
         let start = Instant::now();
         builder.build(&input, settings.levels, settings.construction)?;
         build_ms += start.elapsed().as_secs_f64() * 1e3;
