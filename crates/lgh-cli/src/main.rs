@@ -23,7 +23,8 @@ mod sysmem;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::parser::ValueSource;
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Real-time-style global illumination with many lights, on the CPU: lighting grid hierarchy
 /// (Lin & Yuksel 2019), stochastic light culling (Tokuyoshi & Harada 2016) and a brute-force
@@ -76,10 +77,19 @@ fn install_panic_hook() {
 
 fn main() -> ExitCode {
     install_panic_hook();
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     let result = match cli.command {
         Command::Render(a) => render_cmd::run(&a),
-        Command::View(a) => view(*a),
+        Command::View(mut a) => {
+            // Flags given on the command line keep their values; the others start at the
+            // viewer's interactive defaults.
+            let flags = matches.subcommand_matches("view");
+            a.use_interactive_defaults(|id| {
+                flags.is_some_and(|m| m.value_source(id) == Some(ValueSource::CommandLine))
+            });
+            view(*a)
+        }
         Command::Diff(a) => diff_cmd::run(&a),
         Command::Bench(a) => bench_cmd::run(&a),
     };

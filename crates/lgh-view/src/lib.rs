@@ -73,7 +73,23 @@ pub struct ViewArgs {
     pub threads: usize,
 }
 
+/// The viewer's alpha when `--alpha` is not given: the paper's 1, for interactive rates (the
+/// render default, 4, measured 3.1 fps where this gives 6.0; docs/performance.md).
+pub const INTERACTIVE_ALPHA: f32 = 1.0;
+
 impl ViewArgs {
+    /// Starts at interactive settings where the command line leaves them (`given(id)` tells
+    /// whether the flag of clap id `id` was given): alpha [`INTERACTIVE_ALPHA`] and S_1 the
+    /// lowest level shaded, instead of the render defaults, which favour accuracy.
+    pub fn use_interactive_defaults(&mut self, given: impl Fn(&str) -> bool) {
+        if !given("alpha") {
+            self.settings.lgh.alpha = INTERACTIVE_ALPHA;
+        }
+        if !given("start_level") {
+            self.settings.lgh.start_level = 1;
+        }
+    }
+
     /// The starting settings with the frame size of `--size`.
     #[must_use]
     pub fn render_settings(&self) -> RenderSettings {

@@ -4,6 +4,35 @@ use super::{assert_error, lgh, s, temp_dir};
 
 const SMALL: [&str; 6] = ["--size", "160x90", "--vpls", "5000", "--frames", "6"];
 
+/// The viewer starts at interactive settings (alpha 1, S_1 first) unless the command line
+/// gives them; a flag given keeps its value, the other still gets the viewer's.
+#[test]
+fn view_starts_at_interactive_settings_unless_given() {
+    let d = temp_dir("view-defaults");
+    let stats = d.join("s.json");
+    let settings = |extra: &[&str]| {
+        let args = [
+            &["view", "--headless", "--stats", s(&stats)][..],
+            &SMALL[..4],
+            &["--frames", "1"],
+            extra,
+        ]
+        .concat();
+        let r = lgh(&args);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        let lgh = &json["settings"]["lgh"];
+        (
+            lgh["alpha"].as_f64().unwrap(),
+            lgh["start_level"].as_u64().unwrap(),
+        )
+    };
+    assert_eq!(settings(&[]), (1.0, 1));
+    assert_eq!(settings(&["--alpha", "4"]), (4.0, 1));
+    assert_eq!(settings(&["--start-level", "0"]), (1.0, 0));
+}
+
 #[test]
 fn headless_view_reports_fps_and_pass_medians_and_follows_the_key_script() {
     let d = temp_dir("view");
