@@ -289,6 +289,19 @@ impl RenderSettings {
                 out.push("--bounces 0: no VPLs, so the image has no indirect light".to_string());
             }
         }
+        let lgh = &self.lgh;
+        if self.method == crate::methods::lgh::LGH
+            && lgh.estimator == crate::methods::lgh::Estimator::Paper
+            && lgh.start_level == 0
+            && lgh.shadow_from_level > 0
+        {
+            out.push(format!(
+                "--estimator paper with --start-level 0 and --shadow-from-level {}: the VPLs \
+                 shaded near each pixel take the shadow ratio of the levels from {} up (the \
+                 two rooms come out 17% dark); add --start-level 1 or --shadow-from-level 0",
+                lgh.shadow_from_level, lgh.shadow_from_level
+            ));
+        }
         out
     }
 
@@ -439,6 +452,22 @@ mod tests {
             ..RenderSettings::default()
         };
         assert_eq!(s.validate().unwrap_err().name, "size");
+    }
+
+    /// The paper's estimate with the VPLs shaded near the pixel but not shadow candidates
+    /// gets a warning; the paper's own levels and the unbiased estimate do not.
+    #[test]
+    fn paper_estimate_with_unshadowed_vpls_warns() {
+        use crate::methods::lgh::{Estimator, LGH};
+        let mut s = RenderSettings {
+            method: LGH,
+            ..RenderSettings::default()
+        };
+        assert!(s.warnings().is_empty());
+        s.lgh.estimator = Estimator::Paper;
+        assert_eq!(s.warnings().len(), 1, "{:?}", s.warnings());
+        s.lgh.start_level = 1;
+        assert!(s.warnings().is_empty());
     }
 
     /// The shadow sample count is clamped and zero for unshadowed methods; no filter means no
