@@ -358,9 +358,12 @@ impl ShadeLights {
             return;
         }
         let colour = chroma(h.flux[vpl]) / chroma(self.intensity[j]);
-        let colour = Vec3::select(colour.is_finite_mask(), colour, Vec3::ZERO);
         (sample.q, sample.n) = (q, nq);
-        sample.gain = colour * (mean_rho / (geo * lambda));
+        let gain = colour * (mean_rho / (geo * lambda));
+        // A light with a geometry term near the float minimum has a contribution near it
+        // too, and is all but never selected; an overflowed gain would turn the filter's
+        // sums into NaN.
+        sample.gain = Vec3::select(gain.is_finite_mask(), gain, Vec3::ZERO);
     }
 
     /// The lights packed for the lighting loop, intensities times `scale`.
