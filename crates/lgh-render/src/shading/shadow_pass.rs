@@ -186,8 +186,12 @@ fn trace_band(
             let mut rays = 0;
             for r in reservoirs.pixel(i) {
                 let Some(sample) = r.sample else { continue };
-                rays += 1;
                 let u_k = sample.f * (r.total / r.weight);
+                u += u_k;
+                // No VPL of the sample lights the pixel: nothing to trace.
+                if sample.gain == Vec3::ZERO {
+                    continue;
+                }
                 let q = if sample.jitter == Vec3::ZERO {
                     sample.q
                 } else {
@@ -199,13 +203,8 @@ fn trace_band(
                     );
                     sample.q + t * sample.jitter
                 };
-                if sample.gain == Vec3::ZERO {
-                    u += u_k;
-                    continue;
-                }
-                let visible = !world.occluded_between(xp, ng, q, sample.n.normalize_or_zero());
-                u += u_k;
-                if visible {
+                rays += 1;
+                if !world.occluded_between(xp, ng, q, sample.n.normalize_or_zero()) {
                     s += u_k * sample.gain;
                 }
             }
