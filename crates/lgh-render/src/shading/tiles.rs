@@ -218,7 +218,7 @@ impl AllBounds {
                     row[k].zmin = row[k].zmin.min(g.depth[i]);
                     row[k].zmax = row[k].zmax.max(g.depth[i]);
                 });
-                visit(&mut |k, i| row[k].add(g.depth[i], g.position[i]));
+                visit(&mut |k, i| row[k].add(g.depth[i], g.position[i], g.normal[i]));
             });
         Self {
             tile,
@@ -244,15 +244,28 @@ impl AllBounds {
 /// "Tile binning").
 pub const DEPTH_SLICES: usize = 4;
 
+/// Relative rounding allowance of the tangent-plane test: n . c - n . x and n . (c - x)
+/// differ by a few float epsilons of |c| + |x|.
+const ROUNDING: f32 = 1e-5;
+
 /// What a tile sees: the depth range of its surface points and, per slice of that range, the
 /// bounding box of the points in it, stored axis by axis with the slices in SIMD lanes (an
-/// empty box has lo = +inf and hi = -inf, so that nothing is near it).
+/// empty box has lo = +inf and hi = -inf, so that nothing is near it); and per slice a cone
+/// of the points' shading normals n_x (the first point's normal n_s and the largest
+/// |n_x - n_s|) with the lowest n_s . x of its points, which tells the lights that every
+/// point of the slice sees behind its tangent plane.
 #[derive(Clone, Copy, Debug)]
 struct TileBounds {
     zmin: f32,
     zmax: f32,
     lo: [[f32; DEPTH_SLICES]; 3],
     hi: [[f32; DEPTH_SLICES]; 3],
+    /// n_s per axis (zero for an empty slice).
+    normal: [[f32; DEPTH_SLICES]; 3],
+    /// The largest |n_x - n_s|.
+    spread: [f32; DEPTH_SLICES],
+    /// The lowest n_s . x.
+    plane: [f32; DEPTH_SLICES],
 }
 
 impl TileBounds {
@@ -261,39 +274,65 @@ impl TileBounds {
         zmax: f32::NEG_INFINITY,
         lo: [[f32::INFINITY; DEPTH_SLICES]; 3],
         hi: [[f32::NEG_INFINITY; DEPTH_SLICES]; 3],
+        normal: [[0.0; DEPTH_SLICES]; 3],
+        spread: [0.0; DEPTH_SLICES],
+        plane: [f32::INFINITY; DEPTH_SLICES],
     };
 
-    /// Adds a surface point at depth `z` (within the depth range, set before) to its slice's
-    /// box.
-    fn add(&mut self, z: f32, p: Vec3) {
+    /// Adds a surface point at depth `z` (within the depth range, set before) with shading
+    /// normal `n` to its slice.
+    fn add(&mut self, z: f32, p: Vec3, n: Vec3) {
         let span = self.zmax - self.zmin;
         let k = if span > 0.0 {
             (((z - self.zmin) / span * DEPTH_SLICES as f32) as usize).min(DEPTH_SLICES - 1)
         } else {
             0
         };
+        if self.lo[0][k] > self.hi[0][k] {
+            // The slice's first point sets its normal.
+            for a in 0..3 {
+                self.normal[a][k] = n[a];
+            }
+        }
         for (a, v) in p.to_array().into_iter().enumerate() {
             self.lo[a][k] = self.lo[a][k].min(v);
             self.hi[a][k] = self.hi[a][k].max(v);
         }
+        let ns = Vec3::new(self.normal[0][k], self.normal[1][k], self.normal[2][k]);
+        self.spread[k] = self.spread[k].max((n - ns).length());
+        self.plane[k] = self.plane[k].min(ns.dot(p));
     }
 
     /// False only if no surface point of the tile can lie in the sphere (`c`, `r`) of depth
-    /// range [`lo`, `hi`]: the ranges do not meet, or the sphere misses every slice's box.
+    /// range [`lo`, `hi`] in front of its tangent plane: the ranges do not meet, or in every
+    /// slice the sphere misses the box, or `c` lies behind every point's tangent plane
+    /// (n_x . (c - x) <= 0 for every point x of the slice, whose light is then zero: bounded
+    /// by n_s . c - min n_s . x + max |n_x - n_s| |c - x|).
     #[inline]
     fn may_reach(&self, lo: f32, hi: f32, c: Vec3, r: f32) -> bool {
         if self.zmin > hi || self.zmax < lo {
             return false;
         }
-        // Squared distance from c to each box, four boxes at once.
-        let mut d2 = Vec4::ZERO;
+        // Squared distances from c to each box, nearest and farthest, and n_s . c, four
+        // boxes at once.
+        let (mut d2, mut far2, mut nc) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
         for (a, ca) in c.to_array().into_iter().enumerate() {
             let ca = Vec4::splat(ca);
             let (lo, hi) = (Vec4::from_array(self.lo[a]), Vec4::from_array(self.hi[a]));
             let d = (lo - ca).max(ca - hi).max(Vec4::ZERO);
             d2 += d * d;
+            let f = (ca - lo).abs().max((hi - ca).abs());
+            far2 += f * f;
+            nc += Vec4::from_array(self.normal[a]) * ca;
         }
-        d2.cmple(Vec4::splat(r * r)).any()
+        // The bound less a rounding allowance, so that a light the shading would give a
+        // grazing, non-zero cosine is kept whatever the tile size.
+        let far = far2.sqrt();
+        let allowance = (Vec4::splat(c.length()) + far) * ROUNDING;
+        let behind =
+            (nc - Vec4::from_array(self.plane) + Vec4::from_array(self.spread) * far + allowance)
+                .cmple(Vec4::ZERO);
+        (d2.cmple(Vec4::splat(r * r)) & !behind).any()
     }
 }
 

@@ -250,7 +250,8 @@ fn without_occluders_the_ratio_is_one_and_lgh_equals_lgh_unshadowed() {
 }
 
 /// The tile binning never drops a light whose blending weight is non-zero at a pixel: every
-/// (pixel, light) pair closer than the light's reach is listed in the pixel's tile (checked
+/// (pixel, light) pair closer than the light's reach, with the light in front of the pixel's
+/// tangent plane, is listed in the pixel's tile (checked
 /// against a loop over all lights, on the Cornell box with random spheres, some of infinite
 /// radius, some reaching behind the camera).
 #[test]
@@ -291,7 +292,8 @@ fn tile_binning_never_drops_a_covering_light() {
                 }
                 let listed = listed(x, y);
                 for j in 0..centres.len() {
-                    if ours(j, x, y) && (centres[j] - g.position[i]).length() < radii[j] {
+                    let to = centres[j] - g.position[i];
+                    if ours(j, x, y) && to.length() < radii[j] && g.normal[i].dot(to) > 0.0 {
                         assert!(
                             listed.contains(&j),
                             "{label}: light {j} dropped at ({x}, {y})"
