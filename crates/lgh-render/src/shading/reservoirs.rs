@@ -181,12 +181,17 @@ pub fn halves(x: u32) -> Vec2 {
     )
 }
 
-/// Offers `sample` with weight `lum` to every reservoir of a pixel (Appendix A), with
-/// replacement thresholds ([`Reservoir::update_jump`]): random numbers from `rng` are drawn
-/// only when a reservoir takes the sample, not for every light.
+/// Offers a sample with weight `lum` to every reservoir of a pixel (Appendix A), with
+/// replacement thresholds ([`Reservoir::update_jump`]): random numbers from `rng` are drawn,
+/// and `sample` is called, only when a reservoir takes it, not for every light.
 #[inline]
-pub fn offer(res: &mut [Reservoir<ShadowSample>], sample: ShadowSample, lum: f32, rng: &mut Rng) {
+pub fn offer(
+    res: &mut [Reservoir<ShadowSample>],
+    sample: impl Fn() -> ShadowSample,
+    lum: f32,
+    rng: &mut Rng,
+) {
     for r in res {
-        r.update_jump(|| sample, lum, || rng.next_f32());
+        r.update_jump(&sample, lum, || rng.next_f32());
     }
 }

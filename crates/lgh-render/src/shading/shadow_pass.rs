@@ -260,7 +260,7 @@ mod tests {
                             light: j as u32,
                             ..ShadowSample::default()
                         };
-                        offer(slots, sample, f.x, &mut rng);
+                        offer(slots, || sample, f.x, &mut rng);
                     }
                 }
             };

@@ -95,58 +95,61 @@ pub(super) fn shade_row(
                 let e = chunk * LANES + lane;
                 let (j, l) = (batch.index[e] as usize, batch.level[e]);
                 *a += bc;
-                if k > 0 && l as u32 >= candidates_from {
-                    let pl = &packed[j];
-                    let (p, nj, iso, ij) = (pl.position, pl.normal, pl.iso, pl.intensity);
-                    let b = || blend(pl.role, (p - xp).length(), pl.radius);
-                    let sample = match (settings.jitter, representative) {
-                        // The target is drawn after selection.
-                        (JitterAt::Ray, _) => ShadowSample {
-                            q: p,
-                            n: nj,
-                            f: bc,
-                            jitter: if representative {
-                                Vec3::ZERO
-                            } else {
-                                lights.deviation[j] * settings.dev_scale
-                            },
-                            light: j as u32,
-                            gain: Vec3::ONE,
-                        },
-                        (JitterAt::Candidate, true) => {
-                            let s = rng.next_u32() as usize % SLOTS;
-                            let Some((q, nq)) = lights.representative(j, s) else {
-                                continue;
-                            };
-                            ShadowSample {
-                                q,
-                                n: nq,
-                                f: b() * light_irradiance(xp, n, q, nq, 0.0, ij, eps2),
-                                jitter: Vec3::ZERO,
-                                light: j as u32,
-                                gain: Vec3::ONE,
-                            }
-                        }
-                        (JitterAt::Candidate, false) => {
-                            let t = Vec3::new(
-                                raised_cosine(halves(rng.next_u32())),
-                                raised_cosine(halves(rng.next_u32())),
-                                raised_cosine(halves(rng.next_u32())),
-                            );
-                            let dev = lights.deviation[j] * settings.dev_scale;
-                            let q = p + t * dev;
-                            ShadowSample {
-                                q,
-                                n: nj,
-                                f: b() * light_irradiance(xp, n, q, nj, iso, ij, eps2),
-                                jitter: Vec3::ZERO,
-                                light: j as u32,
-                                gain: Vec3::ONE,
-                            }
-                        }
-                    };
-                    offer(res, sample, luminance(sample.f), &mut rng);
+                if k == 0 || (l as u32) < candidates_from {
+                    continue;
                 }
+                let pl = &packed[j];
+                if settings.jitter == JitterAt::Ray {
+                    // The target is drawn after selection; the light is read only if a
+                    // reservoir takes it.
+                    let sample = || ShadowSample {
+                        q: pl.position,
+                        n: pl.normal,
+                        f: bc,
+                        jitter: if representative {
+                            Vec3::ZERO
+                        } else {
+                            lights.deviation[j] * settings.dev_scale
+                        },
+                        light: j as u32,
+                        gain: Vec3::ONE,
+                    };
+                    offer(res, sample, luminance(bc), &mut rng);
+                    continue;
+                }
+                let (p, nj, iso, ij) = (pl.position, pl.normal, pl.iso, pl.intensity);
+                let b = || blend(pl.role, (p - xp).length(), pl.radius);
+                let sample = if representative {
+                    let s = rng.next_u32() as usize % SLOTS;
+                    let Some((q, nq)) = lights.representative(j, s) else {
+                        continue;
+                    };
+                    ShadowSample {
+                        q,
+                        n: nq,
+                        f: b() * light_irradiance(xp, n, q, nq, 0.0, ij, eps2),
+                        jitter: Vec3::ZERO,
+                        light: j as u32,
+                        gain: Vec3::ONE,
+                    }
+                } else {
+                    let t = Vec3::new(
+                        raised_cosine(halves(rng.next_u32())),
+                        raised_cosine(halves(rng.next_u32())),
+                        raised_cosine(halves(rng.next_u32())),
+                    );
+                    let dev = lights.deviation[j] * settings.dev_scale;
+                    let q = p + t * dev;
+                    ShadowSample {
+                        q,
+                        n: nj,
+                        f: b() * light_irradiance(xp, n, q, nj, iso, ij, eps2),
+                        jitter: Vec3::ZERO,
+                        light: j as u32,
+                        gain: Vec3::ONE,
+                    }
+                };
+                offer(res, || sample, luminance(sample.f), &mut rng);
             }
         }
     }

@@ -295,7 +295,7 @@ pub fn render_slc(
                     }
                     *a += c;
                     if k > 0 {
-                        let sample = ShadowSample {
+                        let sample = || ShadowSample {
                             q: p,
                             n: vpls.normals[j],
                             f: c,
