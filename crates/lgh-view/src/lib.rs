@@ -11,6 +11,7 @@
 //! | [`engine`] | the frame loop: one frame of a view, accumulation while still, temporal filtering while moving |
 //! | [`headless`] | the same loop without a window, driven by a key script: tests, CI, benchmarks |
 //! | [`window`] | the window (winit + softbuffer): input on the event loop, rendering on a worker thread |
+//! | [`overlay`] | the window's on-screen text: the readout and the help (the `font8x8` bitmap font) |
 //!
 //! The renderer knows nothing of windows: this crate drives `lgh-render` through its public
 //! API only.
@@ -22,6 +23,7 @@
 
 pub mod engine;
 pub mod headless;
+pub mod overlay;
 pub mod state;
 pub mod window;
 

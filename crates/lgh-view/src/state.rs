@@ -47,7 +47,7 @@ pub const METHOD_CYCLE: [(lgh_render::Method, &str); 4] = [
 ];
 
 /// The keys, for the help text: (key, what it does).
-pub const CONTROLS: [(&str, &str); 14] = [
+pub const CONTROLS: [(&str, &str); 16] = [
     ("W/S", "move forward / back"),
     ("A/D", "move left / right"),
     ("Q/E", "move down / up"),
@@ -64,7 +64,9 @@ pub const CONTROLS: [(&str, &str); 14] = [
     ("- / =", "VPLs / 10, VPLs x 10"),
     ("J/L", "turn the light"),
     ("C", "show all / direct / indirect light"),
-    ("H, Esc", "this help (printed to the terminal), quit"),
+    ("H", "show / hide this help"),
+    ("O", "show / hide the readout (fps, passes, lights)"),
+    ("Esc", "quit"),
 ];
 
 /// The state of the view.

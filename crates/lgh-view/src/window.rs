@@ -16,8 +16,8 @@ use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 use crate::ViewArgs;
-use crate::engine::ShownFrame;
 use crate::headless::{Record, finish, script_step, start};
+use crate::overlay;
 use crate::state::{Action, CONTROLS, action_of_key};
 
 /// What the worker tells the event loop.
@@ -29,8 +29,9 @@ enum Note {
     Done(Option<String>),
 }
 
-/// The pixels of the frame the worker finished last, with a line for the title bar.
-type Slot = Arc<Mutex<Option<(Vec<u32>, String)>>>;
+/// The pixels of the frame the worker finished last, with its readout
+/// ([`crate::overlay::readout`]).
+type Slot = Arc<Mutex<Option<(Vec<u32>, Vec<String>)>>>;
 
 /// Prints the controls.
 pub fn print_help() {
@@ -62,6 +63,8 @@ pub fn run(args: ViewArgs, scene: Scene) -> Result<()> {
     print_help();
     let mut app = App {
         size: args.size,
+        show_help: false,
+        show_readout: true,
         window: None,
         surface: None,
         actions: tx,
@@ -110,9 +113,9 @@ fn work(
         }
         script_step(args, &mut state, frame);
         let shown = engine.render(&state)?;
-        let title = title(&shown, &state);
+        let lines = overlay::readout(&shown, &state);
         if let Ok(mut s) = slot.lock() {
-            *s = Some((shown.pixels.clone(), title));
+            *s = Some((shown.pixels.clone(), lines));
         }
         record.push(shown);
         frame += 1;
@@ -125,40 +128,12 @@ fn work(
     }
 }
 
-/// The readout: frame time, method and settings, VPLs, grid lights, the slowest passes.
-fn title(f: &ShownFrame, s: &crate::state::ViewState) -> String {
-    let mut passes: Vec<&(String, f64)> = f.timings.iter().filter(|(n, _)| n != "total").collect();
-    passes.sort_by(|a, b| b.1.total_cmp(&a.1));
-    let top: Vec<String> = passes
-        .iter()
-        .take(4)
-        .map(|(n, ms)| format!("{n} {ms:.0}"))
-        .collect();
-    let st = &s.settings;
-    format!(
-        "lgh view | {:.1} fps ({:.0} ms) | {} a{} il{} k{} | {} VPLs{} | {}{} | H: help",
-        1e3 / f.ms.max(1e-3),
-        f.ms,
-        st.method.name(),
-        st.lgh.alpha,
-        st.tiling
-            .interleave
-            .unwrap_or(lgh_render::methods::lgh::DEFAULT_INTERLEAVE),
-        st.shadows.samples,
-        f.vpls,
-        f.grid_lights
-            .map_or(String::new(), |g| format!(", {g} grid lights")),
-        top.join(", "),
-        if f.accumulated > 1 {
-            format!(" | {} frames accumulated", f.accumulated)
-        } else {
-            String::new()
-        }
-    )
-}
-
 struct App {
     size: (u32, u32),
+    /// The help overlay is shown (H).
+    show_help: bool,
+    /// The readout is shown (O).
+    show_readout: bool,
     window: Option<Rc<Window>>,
     surface: Option<softbuffer::Surface<Rc<Window>, Rc<Window>>>,
     actions: Sender<Action>,
@@ -169,15 +144,19 @@ struct App {
 }
 
 impl App {
-    /// Copies the last frame to the window, scaled to its size (nearest pixel).
+    /// Copies the last frame to the window, scaled to its size (nearest pixel), with the
+    /// readout and the help drawn over it.
     fn present(&mut self) {
         let (Some(window), Some(surface)) = (&self.window, &mut self.surface) else {
             return;
         };
-        let Some((pixels, title)) = self.slot.lock().ok().and_then(|s| s.clone()) else {
+        let Some((pixels, lines)) = self.slot.lock().ok().and_then(|s| s.clone()) else {
             return;
         };
-        window.set_title(&title);
+        window.set_title(&format!(
+            "lgh view | {}",
+            lines.first().map_or("", String::as_str)
+        ));
         let size = window.inner_size();
         let (Some(w), Some(h)) = (NonZeroU32::new(size.width), NonZeroU32::new(size.height)) else {
             return;
@@ -197,6 +176,14 @@ impl App {
                     buffer[y * ww + x] = pixels[sy * fw + x * fw / ww];
                 }
             }
+        }
+        let scale = overlay::scale_for(wh);
+        let mut y = 0;
+        if self.show_readout {
+            y = overlay::draw(&mut buffer, ww, wh, (0, 0), &lines, scale);
+        }
+        if self.show_help {
+            overlay::draw(&mut buffer, ww, wh, (0, y), &overlay::help(), scale);
         }
         let _ = buffer.present();
     }
@@ -268,7 +255,11 @@ impl ApplicationHandler<Note> for App {
                     _ => return,
                 };
                 if name.eq_ignore_ascii_case("h") {
-                    print_help();
+                    self.show_help = !self.show_help;
+                    self.present();
+                } else if name.eq_ignore_ascii_case("o") {
+                    self.show_readout = !self.show_readout;
+                    self.present();
                 } else if let Some(a) = action_of_key(&name) {
                     let _ = self.actions.send(a);
                 }
