@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Result, anyhow};
 use clap::Args;
-use lgh_render::accumulate::{frame_settings, render_accumulated};
+use lgh_render::accumulate::{ACCUMULATE_SHADOW_SAMPLES, frame_settings, render_accumulated};
 use lgh_render::frame::render_frame_with;
 use lgh_render::image::ImageFormat;
 use lgh_render::image::metrics::{diff, display_bytes, flip_mean};
@@ -205,6 +205,10 @@ fn accumulation(
     for (n, reference) in references {
         let lgh = RenderSettings {
             method: LGH,
+            shadows: ShadowSettings {
+                samples: ACCUMULATE_SHADOW_SAMPLES,
+                ..base.shadows
+            },
             ..base.clone()
         };
         let f = render_accumulated(world, &lgh, n, &Silent, &mut FrameMemory::default())

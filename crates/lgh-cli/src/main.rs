@@ -80,14 +80,14 @@ fn main() -> ExitCode {
     let matches = Cli::command().get_matches();
     let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     let result = match cli.command {
-        Command::Render(a) => render_cmd::run(&a),
+        Command::Render(mut a) => {
+            a.use_accumulation_defaults(|id| given(&matches, "render", id));
+            render_cmd::run(&a)
+        }
         Command::View(mut a) => {
             // Flags given on the command line keep their values; the others start at the
             // viewer's interactive defaults.
-            let flags = matches.subcommand_matches("view");
-            a.use_interactive_defaults(|id| {
-                flags.is_some_and(|m| m.value_source(id) == Some(ValueSource::CommandLine))
-            });
+            a.use_interactive_defaults(|id| given(&matches, "view", id));
             view(*a)
         }
         Command::Diff(a) => diff_cmd::run(&a),
@@ -100,6 +100,13 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+/// True if argument `id` of subcommand `command` was given on the command line.
+fn given(matches: &clap::ArgMatches, command: &str, id: &str) -> bool {
+    matches
+        .subcommand_matches(command)
+        .is_some_and(|m| m.value_source(id) == Some(ValueSource::CommandLine))
 }
 
 /// `lgh view`: loads the scene (default: the Cornell box with a point light, which can be

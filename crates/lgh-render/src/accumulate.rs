@@ -16,6 +16,13 @@ use crate::progress::{Progress, Silent};
 use crate::settings::{RenderError, RenderSettings};
 use crate::world::World;
 
+/// Shadow samples per pixel and frame of an accumulation when the caller has no preference
+/// (the command line's `--accumulate` without `--shadow-samples`): the shadow filter shrinks
+/// as the frames grow ([`accumulation_settings`]), so each frame's shadow estimate must be
+/// less noisy; more samples per frame converge faster per unit of time than more frames
+/// (docs/design.md, "Accumulation").
+pub const ACCUMULATE_SHADOW_SAMPLES: u32 = 16;
+
 /// Random-stream tag of the frame seeds.
 const STREAM_ACCUMULATE: u64 = 0xacc;
 

@@ -36,7 +36,8 @@ pub struct RenderArgs {
     /// Render N frames of the (static) view with independent VPL sets (seeds derived from
     /// --seed; for lgh also a random grid offset each) and write their mean: a progressive
     /// render that converges as N grows. For brute it is the brute force over the union of
-    /// the N VPL sets, so the two are comparable.
+    /// the N VPL sets, so the two are comparable. Without --shadow-samples, frames take 16
+    /// shadow samples (the shadow filter shrinks as N grows).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub accumulate: u32,
     /// Render a sequence of frames A..B (B excluded, e.g. 0..48) of the scene's animation;
@@ -73,6 +74,16 @@ impl RenderArgs {
             width: self.size.0,
             height: self.size.1,
             ..self.settings.clone()
+        }
+    }
+
+    /// With `--accumulate N` (N > 1), frames take
+    /// [`lgh_render::accumulate::ACCUMULATE_SHADOW_SAMPLES`] shadow samples unless
+    /// `--shadow-samples` was `given` (by its argument id) or is 0 (no shadows).
+    pub fn use_accumulation_defaults(&mut self, given: impl Fn(&str) -> bool) {
+        let shadows = &mut self.settings.shadows;
+        if self.accumulate > 1 && !given("samples") && shadows.samples > 0 {
+            shadows.samples = lgh_render::accumulate::ACCUMULATE_SHADOW_SAMPLES;
         }
     }
 }

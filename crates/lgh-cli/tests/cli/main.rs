@@ -400,6 +400,30 @@ fn accumulate_and_bench_quality() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     assert_eq!(json["accumulated_frames"], 3);
+    // Frames of an accumulation take 16 shadow samples, unless --shadow-samples is given.
+    assert_eq!(json["shadow_samples"], 16);
+    for k in ["0", "2"] {
+        let out = lgh(&[
+            "render",
+            "--accumulate",
+            "2",
+            "--shadow-samples",
+            k,
+            "--size",
+            "32x18",
+            "--vpls",
+            "200",
+            "--quiet",
+            "--out",
+            s(&d.join("a.exr")),
+            "--stats",
+            s(&stats),
+        ]);
+        assert!(out.status.success());
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        assert_eq!(json["shadow_samples"].to_string(), k);
+    }
     assert_error(
         &lgh(&[
             "render",
