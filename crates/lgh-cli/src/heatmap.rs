@@ -7,20 +7,7 @@ use std::path::Path;
 use anyhow::Result;
 use glam::Vec3;
 use lgh_render::Image;
-
-/// A blue-cyan-green-yellow-red ramp for t in [0, 1] (linear RGB).
-fn ramp(t: f32) -> Vec3 {
-    const STOPS: [Vec3; 5] = [
-        Vec3::new(0.0, 0.0, 0.35),
-        Vec3::new(0.0, 0.6, 1.0),
-        Vec3::new(0.1, 0.9, 0.1),
-        Vec3::new(1.0, 0.9, 0.0),
-        Vec3::new(0.9, 0.0, 0.0),
-    ];
-    let x = t.clamp(0.0, 1.0) * 4.0;
-    let i = (x.floor() as usize).min(3);
-    STOPS[i].lerp(STOPS[i + 1], x - i as f32)
-}
+use lgh_render::image::heat::{HEAT_EXPOSURE, ramp};
 
 /// Writes the heat map; returns the maximum overdraw (the top of the legend).
 pub fn write(path: &Path, width: u32, height: u32, overdraw: &[u32]) -> Result<u32> {
@@ -43,7 +30,6 @@ pub fn write(path: &Path, width: u32, height: u32, overdraw: &[u32]) -> Result<u
             };
         }
     }
-    // Exposure chosen so that the ramp's linear colours survive the tone map legibly.
-    img.save(path, 1.6)?;
+    img.save(path, HEAT_EXPOSURE)?;
     Ok(max)
 }

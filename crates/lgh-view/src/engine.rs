@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 use lgh_render::accumulate::frame_settings;
+use lgh_render::image::heat::{HEAT_EXPOSURE, heat_map};
 use lgh_render::image::tonemap::tonemap_to_srgb8;
 use lgh_render::methods::lgh::LghStats;
 use lgh_render::sequence::Sequence;
@@ -23,6 +24,8 @@ pub struct ShownFrame {
     pub image: Image,
     /// The image tone-mapped, one `0x00RRGGBB` per pixel (softbuffer's layout).
     pub pixels: Vec<u32>,
+    /// The exposure `pixels` were tone-mapped with (the heat map has its own).
+    pub exposure: f32,
     /// Per-pass times of this frame, ms (`total` is the whole render).
     pub timings: Vec<(String, f64)>,
     /// VPLs of this frame.
@@ -31,6 +34,9 @@ pub struct ShownFrame {
     pub grid_lights: Option<usize>,
     /// Frames in the running mean (1 while moving).
     pub accumulated: u32,
+    /// With the heat map on and a method that counts them: the mean and the largest number
+    /// of lights evaluated per pixel (the heat map's top).
+    pub overdraw: Option<(f64, u32)>,
     /// Wall time of the frame, ms, including the view update.
     pub ms: f64,
 }
@@ -113,8 +119,18 @@ impl FrameLoop {
             self.accumulated += 1;
         }
         let inv = 1.0 / self.accumulated as f32;
-        let mean: Vec<Vec3> = self.sum.iter().map(|s| *s * inv).collect();
-        let rgb = tonemap_to_srgb8(&mean, self.exposure);
+        let mut mean: Vec<Vec3> = self.sum.iter().map(|s| *s * inv).collect();
+        let mut exposure = self.exposure;
+        let mut overdraw = None;
+        if state.heatmap
+            && let Some(counts) = &frame.method.lights_per_pixel
+        {
+            let (colours, max) = heat_map(counts);
+            overdraw = Some((frame.gbuffer.mean_over_hits(counts), max));
+            mean = colours;
+            exposure = HEAT_EXPOSURE;
+        }
+        let rgb = tonemap_to_srgb8(&mean, exposure);
         let packed = rgb
             .chunks_exact(3)
             .map(|c| (u32::from(c[0]) << 16) | (u32::from(c[1]) << 8) | u32::from(c[2]))
@@ -122,10 +138,12 @@ impl FrameLoop {
         let shown = ShownFrame {
             image: Image::from_pixels(frame.image.width, frame.image.height, mean),
             pixels: packed,
+            exposure,
             timings: frame.timings.0.clone(),
             vpls: frame.vpls.vpls.len(),
             grid_lights: frame.stats::<LghStats>().map(|s| s.grid_lights),
             accumulated: self.accumulated,
+            overdraw,
             ms: start.elapsed().as_secs_f64() * 1e3,
         };
         if still || !state.taa {

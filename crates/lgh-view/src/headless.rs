@@ -103,9 +103,9 @@ pub fn check_keys(keys: &[String]) -> Result<()> {
 ///
 /// # Errors
 /// A file cannot be written.
-pub fn finish(args: &ViewArgs, state: &ViewState, record: &Record, exposure: f32) -> Result<()> {
+pub fn finish(args: &ViewArgs, state: &ViewState, record: &Record) -> Result<()> {
     if let (Some(path), Some(last)) = (&args.screenshot, record.last()) {
-        last.image.save(path, exposure)?;
+        last.image.save(path, last.exposure)?;
     }
     if let Some(path) = &args.stats {
         write_json(path, &record.stats(args, state))?;
@@ -134,7 +134,7 @@ pub fn run(args: &ViewArgs, scene: Scene) -> Result<()> {
         script_step(args, &mut state, f);
         record.push(engine.render(&state)?);
     }
-    finish(args, &state, &record, engine.exposure())
+    finish(args, &state, &record)
 }
 
 /// The frame loop and the starting view of `args` over `scene`.

@@ -36,6 +36,8 @@ pub enum Action {
     TurnLight(i8),
     /// Component shown: all, direct, indirect, in turn.
     NextComponent,
+    /// The overdraw heat map (lights evaluated per pixel) instead of the image, or back.
+    ToggleHeatmap,
 }
 
 /// Methods the viewer cycles through, with what they are.
@@ -47,7 +49,7 @@ pub const METHOD_CYCLE: [(lgh_render::Method, &str); 4] = [
 ];
 
 /// The keys, for the help text: (key, what it does).
-pub const CONTROLS: [(&str, &str); 16] = [
+pub const CONTROLS: [(&str, &str); 17] = [
     ("W/S", "move forward / back"),
     ("A/D", "move left / right"),
     ("Q/E", "move down / up"),
@@ -64,6 +66,7 @@ pub const CONTROLS: [(&str, &str); 16] = [
     ("- / =", "VPLs / 10, VPLs x 10"),
     ("J/L", "turn the light"),
     ("C", "show all / direct / indirect light"),
+    ("V", "overdraw heat map (lights per pixel) on / off"),
     ("H", "show / hide this help"),
     ("O", "show / hide the readout (fps, passes, lights)"),
     ("Esc", "quit"),
@@ -86,6 +89,8 @@ pub struct ViewState {
     pub light_angle: f32,
     /// Temporal filtering of the shadows.
     pub taa: bool,
+    /// Show the overdraw heat map (lights evaluated per pixel) instead of the image.
+    pub heatmap: bool,
     /// Length of a step, in scene units.
     pub step: f32,
     /// Incremented by every change: accumulation restarts when it moves.
@@ -105,6 +110,7 @@ impl ViewState {
             fov: camera.fov_y_degrees,
             light_angle: 0.0,
             taa,
+            heatmap: false,
             step: radius / 20.0,
             version: 0,
         }
@@ -235,6 +241,10 @@ impl ViewState {
                 };
                 Some(format!("showing: {:?}", s.component))
             }
+            Action::ToggleHeatmap => {
+                self.heatmap = !self.heatmap;
+                Some(format!("overdraw heat map: {}", self.heatmap))
+            }
         };
         self.version += 1;
         said
@@ -267,6 +277,7 @@ pub fn action_of_key(key: &str) -> Option<Action> {
         "j" => Action::TurnLight(-1),
         "l" => Action::TurnLight(1),
         "c" => Action::NextComponent,
+        "v" => Action::ToggleHeatmap,
         _ => return None,
     })
 }

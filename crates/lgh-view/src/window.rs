@@ -107,7 +107,7 @@ fn work(
                 }
                 Err(TryRecvError::Empty) => break,
                 Err(TryRecvError::Disconnected) => {
-                    return finish(args, &state, &record, engine.exposure());
+                    return finish(args, &state, &record);
                 }
             }
         }
@@ -120,10 +120,10 @@ fn work(
         record.push(shown);
         frame += 1;
         if proxy.send_event(Note::Frame).is_err() {
-            return finish(args, &state, &record, engine.exposure());
+            return finish(args, &state, &record);
         }
         if args.frames.is_some_and(|n| frame >= n) {
-            return finish(args, &state, &record, engine.exposure());
+            return finish(args, &state, &record);
         }
     }
 }

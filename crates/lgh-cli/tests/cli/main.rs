@@ -378,50 +378,28 @@ fn bench_temporal_reports_flicker_with_and_without_the_filter() {
 fn accumulate_and_bench_quality() {
     let d = temp_dir("quality");
     let stats = d.join("a.json");
-    let out = lgh(&[
-        "render",
-        "--accumulate",
-        "3",
-        "--size",
-        "32x18",
-        "--vpls",
-        "200",
-        "--quiet",
-        "--out",
-        s(&d.join("a.exr")),
-        "--stats",
-        s(&stats),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let out_file = d.join("a.exr");
+    let accumulate = |extra: &[&str]| {
+        let base = [
+            "render", "--size", "32x18", "--vpls", "200", "--quiet", "--out",
+        ];
+        let args = [&base[..], &[s(&out_file), "--stats", s(&stats)], extra].concat();
+        let out = lgh(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        json
+    };
+    let json = accumulate(&["--accumulate", "3"]);
     assert_eq!(json["accumulated_frames"], 3);
     // Frames of an accumulation take 16 shadow samples, unless --shadow-samples is given.
     assert_eq!(json["shadow_samples"], 16);
     for k in ["0", "2"] {
-        let out = lgh(&[
-            "render",
-            "--accumulate",
-            "2",
-            "--shadow-samples",
-            k,
-            "--size",
-            "32x18",
-            "--vpls",
-            "200",
-            "--quiet",
-            "--out",
-            s(&d.join("a.exr")),
-            "--stats",
-            s(&stats),
-        ]);
-        assert!(out.status.success());
-        let json: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        let json = accumulate(&["--accumulate", "2", "--shadow-samples", k]);
         assert_eq!(json["shadow_samples"].to_string(), k);
     }
     assert_error(

@@ -72,6 +72,21 @@ fn headless_view_reports_fps_and_pass_medians_and_follows_the_key_script() {
     let diff = lgh(&["diff", s(&moved), s(&shot), "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&diff.stdout).unwrap();
     assert!(v["flip"].as_f64().unwrap() > 0.01, "{v}");
+    // V shows the heat map: the ramp's saturated colours everywhere (their channels differ
+    // by 0.35 or more before the tone map), where the image has black and grey pixels.
+    let heat = d.join("heat.png");
+    run(&["--keys", "v"], &heat);
+    let saturated = |png: &std::path::Path| {
+        let img = lgh_render::Image::load(png).unwrap();
+        let n = img
+            .pixels
+            .iter()
+            .filter(|p| p.max_element() - p.min_element() > 0.2)
+            .count();
+        n as f64 / img.pixels.len() as f64
+    };
+    assert!(saturated(&shot) < 0.5, "{}", saturated(&shot));
+    assert_eq!(saturated(&heat), 1.0);
     assert_error(&lgh(&["view", "--headless"]), &["--frames"]);
     assert_error(
         &lgh(&["view", "--headless", "--frames", "2", "--keys", "w,zz"]),

@@ -8,6 +8,7 @@ use lgh_core::color::finite_or_zero;
 
 use crate::settings::MAX_PIXELS;
 
+pub mod heat;
 pub mod metrics;
 pub mod tonemap;
 
