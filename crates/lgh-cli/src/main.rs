@@ -44,7 +44,7 @@ enum Command {
     Render(Box<render_cmd::RenderArgs>),
     /// Fly through a scene in a window while it renders (or --headless); keys change the
     /// method and its settings, and move the camera and the light.
-    #[command(allow_negative_numbers = true)]
+    #[command(allow_negative_numbers = true, after_help = lgh_view::state::controls_help())]
     View(Box<lgh_view::ViewArgs>),
     /// Compare image A against reference B (EXR or PNG, same size).
     Diff(diff_cmd::DiffArgs),

@@ -43,7 +43,7 @@ pub struct ViewArgs {
     /// Size of the rendered frame, WIDTHxHEIGHT (the window shows it scaled).
     #[arg(long, default_value = "640x360", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// The starting rendering settings (keys change them; see the help printed at start).
+    /// The starting rendering settings (keys change them; see the controls in `lgh view --help`).
     #[command(flatten)]
     pub settings: RenderSettings,
     /// Start with temporal filtering of the shadows (T toggles it).

@@ -72,6 +72,16 @@ pub const CONTROLS: [(&str, &str); 17] = [
     ("Esc", "quit"),
 ];
 
+/// The controls as text: a heading and one line per key (for `--help` and the terminal).
+#[must_use]
+pub fn controls_help() -> String {
+    let mut text = String::from("Controls (H shows them in the window):\n");
+    for (key, what) in CONTROLS {
+        text.push_str(&format!("  {key:<14} {what}\n"));
+    }
+    text
+}
+
 /// The state of the view.
 #[derive(Clone, Debug)]
 pub struct ViewState {

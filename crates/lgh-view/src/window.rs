@@ -18,7 +18,7 @@ use winit::window::{Window, WindowId};
 use crate::ViewArgs;
 use crate::headless::{Record, finish, script_step, start};
 use crate::overlay;
-use crate::state::{Action, CONTROLS, action_of_key};
+use crate::state::{Action, action_of_key};
 
 /// What the worker tells the event loop.
 #[derive(Debug)]
@@ -35,10 +35,7 @@ type Slot = Arc<Mutex<Option<(Vec<u32>, Vec<String>)>>>;
 
 /// Prints the controls.
 pub fn print_help() {
-    eprintln!("lgh view controls:");
-    for (key, what) in CONTROLS {
-        eprintln!("  {key:<14} {what}");
-    }
+    eprint!("{}", crate::state::controls_help());
 }
 
 /// Opens the window over `scene` and runs until it is closed or `--frames` are shown.

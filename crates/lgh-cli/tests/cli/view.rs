@@ -28,6 +28,11 @@ fn view_starts_at_interactive_settings_unless_given() {
             lgh["start_level"].as_u64().unwrap(),
         )
     };
+    // --help lists the keys after the flags.
+    let help = String::from_utf8_lossy(&lgh(&["view", "--help"]).stdout).into_owned();
+    for key in ["Controls", "W/S", "overdraw heat map", "Esc"] {
+        assert!(help.contains(key), "{key}: {help}");
+    }
     assert_eq!(settings(&[]), (1.0, 1));
     assert_eq!(settings(&["--alpha", "4"]), (4.0, 1));
     assert_eq!(settings(&["--start-level", "0"]), (1.0, 0));
