@@ -127,7 +127,9 @@ pub fn render_frame_with(
     let camera = world.scene.camera().frame(w, h);
     let g = t.time("gbuffer", || {
         let mut g = memory.gbuffer.take().unwrap_or_default();
-        g.render_into(world, &camera, w, h);
+        if !g.shows(world, &camera, w, h) {
+            g.render_into(world, &camera, w, h);
+        }
         g
     });
     let all_reflected = s.method.illumination() == Illumination::AllReflected;

@@ -22,7 +22,9 @@ pub struct FrameMemory {
 
 impl FrameMemory {
     /// Takes back the G-buffer of a frame that is no longer needed, so that the next frame
-    /// renders into the same planes.
+    /// renders into the same planes, or, if it has the same camera and geometry, reuses them
+    /// as they are ([`GBuffer::shows`]; a caller that changed the planes sets
+    /// [`GBuffer::view`] to `None`).
     pub fn recycle_gbuffer(&mut self, g: GBuffer) {
         self.gbuffer = Some(g);
     }

@@ -17,7 +17,7 @@ pub struct Camera {
 }
 
 /// A camera set up for one image size: maps pixel positions to ray directions.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraFrame {
     /// Eye position.
     pub origin: Vec3,

@@ -587,6 +587,7 @@ mod tests {
             albedo: vec![Vec3::ONE; n],
             depth,
             emission: vec![Vec3::ZERO; n],
+            view: None,
         };
         (g, s, u)
     }

@@ -28,6 +28,9 @@ pub struct GBuffer {
     pub depth: Vec<f32>,
     /// Emitted radiance towards the camera.
     pub emission: Vec<Vec3>,
+    /// What the planes show, as [`GBuffer::render_into`] left them: the world's geometry id
+    /// and the camera; `None` if unknown (set it to `None` after changing the planes).
+    pub view: Option<(u64, CameraFrame)>,
 }
 
 impl GBuffer {
@@ -39,10 +42,21 @@ impl GBuffer {
         g
     }
 
+    /// True if the planes already show what [`GBuffer::render_into`] would render: the same
+    /// geometry of `world` seen by the same camera `frame` at `width` x `height` (a viewer
+    /// whose camera stands still while the light moves).
+    #[must_use]
+    pub fn shows(&self, world: &World, frame: &CameraFrame, width: u32, height: u32) -> bool {
+        (self.width, self.height) == (width, height)
+            && self.depth.len() == width as usize * height as usize
+            && self.view == Some((world.geometry_id(), *frame))
+    }
+
     /// [`GBuffer::render`] into this buffer's planes, reusing their memory when the pixel
     /// count is unchanged (as a real-time renderer reuses its render targets): every pixel is
     /// written, so nothing is cleared first. Fresh planes are allocated in parallel.
     pub fn render_into(&mut self, world: &World, frame: &CameraFrame, width: u32, height: u32) {
+        self.view = Some((world.geometry_id(), *frame));
         let (w, n) = (width as usize, width as usize * height as usize);
         (self.width, self.height) = (width, height);
         if self.depth.len() != n {

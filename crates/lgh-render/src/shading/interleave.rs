@@ -492,6 +492,7 @@ mod tests {
             albedo: vec![Vec3::ONE; n],
             depth,
             emission: vec![Vec3::ZERO; n],
+            view: None,
         }
     }
 

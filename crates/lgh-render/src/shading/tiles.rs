@@ -474,6 +474,7 @@ mod tests {
             albedo: vec![Vec3::ONE; n_px],
             depth: vec![1.0; n_px],
             emission: vec![Vec3::ZERO; n_px],
+            view: None,
         };
         let camera = Camera {
             position: Vec3::new(0.0, 0.0, 5.0),

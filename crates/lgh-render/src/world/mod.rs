@@ -31,6 +31,15 @@ pub struct World {
     rest: (Option<lgh_scene::Camera>, Vec<lgh_scene::Light>),
     /// The mesh as loaded, kept only if the animation moves objects.
     rest_mesh: Option<lgh_scene::Mesh>,
+    /// Names the geometry: drawn afresh from a process-wide counter by every world and every
+    /// change of its mesh, so that two equal ids mean the same triangles.
+    geometry_id: u64,
+}
+
+/// The next [`World::geometry_id`].
+fn next_geometry_id() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
 /// The unit face normal of every triangle of `mesh`.
@@ -79,7 +88,15 @@ impl World {
             centre,
             radius,
             ray_epsilon: 1e-4 * radius,
+            geometry_id: next_geometry_id(),
         }
+    }
+
+    /// The id of the current geometry: equal ids (of any worlds of this process) mean the
+    /// same triangles, so that what a camera sees of them can be reused.
+    #[must_use]
+    pub fn geometry_id(&self) -> u64 {
+        self.geometry_id
     }
 
     /// Moves the camera, the lights and the animated objects to time `t` (seconds) of the
@@ -98,6 +115,7 @@ impl World {
         {
             self.accel = Accel::build(&self.scene.mesh);
             self.face_normals = face_normals(&self.scene.mesh);
+            self.geometry_id = next_geometry_id();
         }
         self.lights = LightSet::new(&self.scene, self.radius);
     }

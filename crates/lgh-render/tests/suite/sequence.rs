@@ -178,3 +178,56 @@ fn recycled_frames_do_not_change_the_next_ones() {
         seq.recycle(frame);
     }
 }
+
+/// A frame whose camera and geometry are those of the G-buffer handed back reuses its planes
+/// as they are (a viewer whose light moves): a mark left in them survives. A moved camera,
+/// or a G-buffer whose view is unknown, is traced again and equals a fresh one.
+#[test]
+fn the_gbuffer_is_reused_only_for_the_same_view() {
+    use lgh_render::FrameMemory;
+    use lgh_render::passes::gbuffer::GBuffer;
+    let mut world = moving_light_world();
+    let s = settings(3);
+    let mut memory = FrameMemory::default();
+    let render = |world: &World, memory: &mut FrameMemory| {
+        lgh_render::render_frame_with(world, &s, &Silent, memory).unwrap()
+    };
+    let fresh = |world: &World, g: &GBuffer| {
+        let camera = world.scene.camera().frame(s.width, s.height);
+        let f = GBuffer::render(world, &camera, s.width, s.height);
+        (&f.position, &f.normal, &f.albedo, &f.depth, &f.emission)
+            == (&g.position, &g.normal, &g.albedo, &g.depth, &g.emission)
+    };
+    let mark = glam::Vec3::splat(7.0);
+    let mut g = render(&world, &mut memory).gbuffer;
+    assert!(fresh(&world, &g));
+    g.albedo[0] = mark;
+    memory.recycle_gbuffer(g);
+    // The light moves, the camera stays: the planes are reused, mark and all.
+    let camera = world.scene.camera();
+    let lights = world.scene.lights.clone();
+    let mut turned = lights.clone();
+    for l in &mut turned {
+        if let lgh_scene::Light::Point { position, .. } = l {
+            position.x += 0.1;
+        }
+    }
+    world.set_view(camera.clone(), turned);
+    let mut g = render(&world, &mut memory).gbuffer;
+    assert_eq!(g.albedo[0], mark);
+    // With the view unknown, traced again.
+    g.view = None;
+    memory.recycle_gbuffer(g);
+    let g = render(&world, &mut memory).gbuffer;
+    assert!(fresh(&world, &g));
+    let mut g = g;
+    g.albedo[0] = mark;
+    memory.recycle_gbuffer(g);
+    // The camera moves: traced again.
+    let mut moved = camera;
+    moved.position += glam::Vec3::new(0.1, 0.05, 0.0);
+    world.set_view(moved, lights);
+    let g = render(&world, &mut memory).gbuffer;
+    assert!(fresh(&world, &g));
+    assert_ne!(g.albedo[0], mark);
+}
