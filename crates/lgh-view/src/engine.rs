@@ -7,6 +7,7 @@
 use std::time::Instant;
 
 use glam::Vec3;
+use rayon::prelude::*;
 use lgh_render::accumulate::frame_settings;
 use lgh_render::image::heat::{HEAT_EXPOSURE, heat_map};
 use lgh_render::image::tonemap::tonemap_to_srgb8;
@@ -113,13 +114,14 @@ impl FrameLoop {
             self.sum.clone_from(pixels);
             self.accumulated = 1;
         } else {
-            for (s, p) in self.sum.iter_mut().zip(pixels) {
-                *s += *p;
-            }
+            self.sum
+                .par_iter_mut()
+                .zip(pixels.par_iter())
+                .for_each(|(s, p)| *s += *p);
             self.accumulated += 1;
         }
         let inv = 1.0 / self.accumulated as f32;
-        let mut mean: Vec<Vec3> = self.sum.iter().map(|s| *s * inv).collect();
+        let mut mean: Vec<Vec3> = self.sum.par_iter().map(|s| *s * inv).collect();
         let mut exposure = self.exposure;
         let mut overdraw = None;
         if state.heatmap
@@ -132,7 +134,7 @@ impl FrameLoop {
         }
         let rgb = tonemap_to_srgb8(&mean, exposure);
         let packed = rgb
-            .chunks_exact(3)
+            .par_chunks_exact(3)
             .map(|c| (u32::from(c[0]) << 16) | (u32::from(c[1]) << 8) | u32::from(c[2]))
             .collect();
         let shown = ShownFrame {

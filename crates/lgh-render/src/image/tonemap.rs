@@ -6,6 +6,7 @@
 //! of this and keeps linear radiance.
 
 use glam::Vec3;
+use rayon::prelude::*;
 use lgh_core::color::finite_or_zero;
 
 /// The ACES filmic curve (Narkowicz 2015 fit) for one channel; result in [0, 1].
@@ -32,8 +33,8 @@ pub fn linear_to_srgb(c: f32) -> f32 {
 #[must_use]
 pub fn tonemap_to_srgb8(pixels: &[Vec3], exposure: f32) -> Vec<u8> {
     pixels
-        .iter()
-        .flat_map(|&p| {
+        .par_iter()
+        .flat_map_iter(|&p| {
             let p = finite_or_zero(p) * exposure;
             [p.x, p.y, p.z].map(|c| (linear_to_srgb(aces(c)) * 255.0 + 0.5) as u8)
         })
