@@ -418,14 +418,8 @@ fn representative_weight(x: Vec3, n_x: Vec3, q: Vec3, n_q: Vec3, eps2: f32) -> f
 /// -y, +z, -z), so that each hierarchy only averages normals that roughly agree.
 pub(super) fn split_by_normal(vpls: &Vpls) -> Vec<Vpls> {
     let mut groups = vec![Vpls::default(); 6];
-    let two = std::env::var("LGH_BINS").is_ok_and(|v| v == "2");
     for i in 0..vpls.len() {
         let n = vpls.normals[i];
-        if two {
-            let bin = usize::from(n.x + n.y + n.z < 0.0);
-            groups[bin].push(vpls.positions[i], n, vpls.flux[i]);
-            continue;
-        }
         let a = n.abs();
         let axis = if a.x >= a.y && a.x >= a.z {
             0
