@@ -2,7 +2,8 @@
 //! still, frames with independent VPL sets (and, for lgh, random grid offsets) accumulate
 //! into a running mean that converges (docs/design.md, "Accumulation"); any change restarts
 //! it. While it moves, frames go through the temporal filter if it is on. Moving the light
-//! regenerates the VPLs and rebuilds the hierarchy, as every frame does.
+//! regenerates the VPLs and rebuilds the hierarchy, as every frame does. With the heat map
+//! on, the frame shown is the overdraw of the frame just rendered (lights per pixel).
 
 use std::time::Instant;
 
