@@ -8,7 +8,6 @@
 use std::time::Instant;
 
 use glam::Vec3;
-use rayon::prelude::*;
 use lgh_render::accumulate::frame_settings;
 use lgh_render::image::heat::{HEAT_EXPOSURE, heat_map};
 use lgh_render::image::tonemap::tonemap_to_srgb8;
@@ -16,6 +15,7 @@ use lgh_render::methods::lgh::LghStats;
 use lgh_render::sequence::Sequence;
 use lgh_render::{FrameMemory, Image, RenderError, Silent, World, render_frame_with};
 use lgh_scene::{Light, Scene};
+use rayon::prelude::*;
 
 use crate::state::ViewState;
 

@@ -6,8 +6,8 @@
 //! of this and keeps linear radiance.
 
 use glam::Vec3;
-use rayon::prelude::*;
 use lgh_core::color::finite_or_zero;
+use rayon::prelude::*;
 
 /// The ACES filmic curve (Narkowicz 2015 fit) for one channel; result in [0, 1].
 #[inline]
