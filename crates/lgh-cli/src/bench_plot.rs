@@ -10,6 +10,42 @@ use plotters::prelude::*;
 
 use crate::bench_quality::Point;
 
+/// True if `v` is 1, 2 or 5 times a power of ten.
+fn is_125(v: f64) -> bool {
+    let lead = v / 10f64.powf(v.log10().floor());
+    [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .any(|d| (lead - d).abs() < 1e-6 * d)
+}
+
+/// How many values 1, 2 or 5 times a power of ten lie in [`lo`, `hi`] (positive).
+fn leading_125_within(lo: f64, hi: f64) -> usize {
+    if !(lo > 0.0 && hi >= lo && hi.is_finite()) {
+        return 0;
+    }
+    let mut n = 0;
+    let mut decade = 10f64.powf(lo.log10().floor());
+    while decade <= hi {
+        n += [1.0, 2.0, 5.0]
+            .iter()
+            .filter(|&&d| (lo..=hi).contains(&(d * decade)))
+            .count();
+        decade *= 10.0;
+    }
+    n
+}
+
+/// A log axis's label for `v` with `decimals` places. With `sparse`, only values 1, 2 or 5
+/// times a power of ten are labelled: the ticks of a log axis crowd at the top of each
+/// decade, where every label would overlap its neighbours (an axis spanning fewer than two
+/// such values labels every tick).
+fn decade_label(v: f64, decimals: usize, sparse: bool) -> String {
+    if !(v.is_finite() && v > 0.0) || (sparse && !is_125(v)) {
+        return String::new();
+    }
+    format!("{v:.decimals$}")
+}
+
 /// Where to look for a font.
 const FONTS: [&str; 3] = [
     "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
@@ -141,12 +177,18 @@ pub fn plot(path: &Path, scenes: &[String], points: &[Point]) -> Result<()> {
                     (y0 * 0.8..y1 * 1.25).log_scale(),
                 )
                 .map_err(|e| anyhow!("plot: {e}"))?;
+            let (x_sparse, y_sparse) = (
+                leading_125_within(x0 * 0.8, x1 * 1.25) >= 2,
+                leading_125_within(y0 * 0.8, y1 * 1.25) >= 2,
+            );
+            let x_label = |v: &f64| decade_label(*v, 0, x_sparse);
+            let y_label = |v: &f64| decade_label(*v, 3, y_sparse);
             let mut mesh = chart.configure_mesh();
             if text {
                 mesh.x_desc("ms (VPL generation + indirect light)")
                     .y_desc(if row == 0 { "FLIP" } else { "rel_rmse" })
-                    .x_label_formatter(&|v| format!("{v:.0}"))
-                    .y_label_formatter(&|v| format!("{v:.3}"))
+                    .x_label_formatter(&x_label)
+                    .y_label_formatter(&y_label)
                     .label_style(("sans-serif", 12));
             } else {
                 mesh.disable_x_axis().disable_y_axis();
@@ -179,4 +221,28 @@ pub fn plot(path: &Path, scenes: &[String], points: &[Point]) -> Result<()> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{decade_label, leading_125_within};
+
+    /// Only 1, 2 and 5 times a power of ten are labelled, unless the axis has fewer than two.
+    #[test]
+    fn log_axis_labels_skip_the_crowded_ticks() {
+        assert_eq!(decade_label(100.0, 0, true), "100");
+        assert_eq!(decade_label(200.0, 0, true), "200");
+        assert_eq!(decade_label(500.0, 0, true), "500");
+        assert_eq!(decade_label(0.05, 3, true), "0.050");
+        assert_eq!(decade_label(0.01, 3, true), "0.010");
+        for v in [300.0, 400.0, 700.0, 0.06, 0.07, 0.0, -1.0, f64::NAN] {
+            assert_eq!(decade_label(v, 3, true), "", "{v}");
+        }
+        // An axis with one such value or none labels every tick.
+        assert_eq!(decade_label(0.07, 3, false), "0.070");
+        assert_eq!(leading_125_within(0.06, 0.09), 0);
+        assert_eq!(leading_125_within(0.04, 0.11), 2);
+        assert_eq!(leading_125_within(8.0, 600.0), 6);
+        assert_eq!(leading_125_within(0.0, 1.0), 0);
+    }
 }
