@@ -163,6 +163,8 @@ pub fn plot(path: &Path, scenes: &[String], points: &[Point]) -> Result<()> {
                 (y0, y1) = (y0.min(metric(p)), y1.max(metric(p)));
             }
             let caption = format!("{scene}: {}", if row == 0 { "FLIP" } else { "rel_rmse" });
+            // The axes' ranges: a margin around the points.
+            let (xs, ys) = ((x0 * 0.8, x1 * 1.25), (y0 * 0.8, y1 * 1.25));
             let mut builder = ChartBuilder::on(area);
             builder.margin(8);
             if text {
@@ -172,14 +174,11 @@ pub fn plot(path: &Path, scenes: &[String], points: &[Point]) -> Result<()> {
                     .y_label_area_size(48);
             }
             let mut chart = builder
-                .build_cartesian_2d(
-                    (x0 * 0.8..x1 * 1.25).log_scale(),
-                    (y0 * 0.8..y1 * 1.25).log_scale(),
-                )
+                .build_cartesian_2d((xs.0..xs.1).log_scale(), (ys.0..ys.1).log_scale())
                 .map_err(|e| anyhow!("plot: {e}"))?;
             let (x_sparse, y_sparse) = (
-                leading_125_within(x0 * 0.8, x1 * 1.25) >= 2,
-                leading_125_within(y0 * 0.8, y1 * 1.25) >= 2,
+                leading_125_within(xs.0, xs.1) >= 2,
+                leading_125_within(ys.0, ys.1) >= 2,
             );
             let x_label = |v: &f64| decade_label(*v, 0, x_sparse);
             let y_label = |v: &f64| decade_label(*v, 3, y_sparse);

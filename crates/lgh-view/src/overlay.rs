@@ -7,7 +7,7 @@ use font8x8::{BASIC_FONTS, UnicodeFonts};
 use lgh_render::methods::lgh::DEFAULT_INTERLEAVE;
 
 use crate::engine::ShownFrame;
-use crate::state::{CONTROLS, ViewState};
+use crate::state::{ViewState, control_lines};
 
 /// Pixels of a glyph (the font's 8), times the text scale.
 const CELL: usize = 8;
@@ -63,11 +63,7 @@ pub fn readout(f: &ShownFrame, s: &ViewState) -> Vec<String> {
 #[must_use]
 pub fn help() -> Vec<String> {
     let mut lines = vec!["lgh view controls".to_string()];
-    lines.extend(
-        CONTROLS
-            .iter()
-            .map(|(key, what)| format!("{key:<14} {what}")),
-    );
+    lines.extend(control_lines());
     lines
 }
 

@@ -76,10 +76,19 @@ pub const CONTROLS: [(&str, &str); 17] = [
 #[must_use]
 pub fn controls_help() -> String {
     let mut text = String::from("Controls (H shows them in the window):\n");
-    for (key, what) in CONTROLS {
-        text.push_str(&format!("  {key:<14} {what}\n"));
+    for line in control_lines() {
+        text.push_str("  ");
+        text.push_str(&line);
+        text.push('\n');
     }
     text
+}
+
+/// One line per control: the key, padded, and what it does.
+pub fn control_lines() -> impl Iterator<Item = String> {
+    CONTROLS
+        .iter()
+        .map(|(key, what)| format!("{key:<14} {what}"))
 }
 
 /// The state of the view.
