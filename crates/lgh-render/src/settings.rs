@@ -403,6 +403,9 @@ impl RenderSettings {
             in_range("tile", t, 1, 256)?;
         }
         in_range("start-level", self.lgh.start_level, 0, 1)?;
+        if let Some(l) = self.lgh.only_level {
+            in_range("only-level", l, 0, lgh_core::lighting_grid::MAX_LEVELS)?;
+        }
         if let Some((name, expected)) = self.lgh.unbiased_conflict() {
             let value = match name {
                 "shadow-target" => format!("{:?}", self.lgh.shadow_target).to_lowercase(),

@@ -34,6 +34,8 @@ pub struct ShownFrame {
     pub vpls: usize,
     /// Grid lights of this frame's hierarchy (lgh).
     pub grid_lights: Option<usize>,
+    /// The levels this frame's hierarchy shaded, lowest and l_max (lgh).
+    pub levels: Option<(u32, u32)>,
     /// Frames in the running mean (1 while moving).
     pub accumulated: u32,
     /// With the heat map on and a method that counts them: the mean and the largest number
@@ -145,6 +147,9 @@ impl FrameLoop {
             timings: frame.timings.0.clone(),
             vpls: frame.vpls.vpls.len(),
             grid_lights: frame.stats::<LghStats>().map(|s| s.grid_lights),
+            levels: frame
+                .stats::<LghStats>()
+                .map(|s| (state.settings.lgh.start_level.min(1), s.levels)),
             accumulated: self.accumulated,
             overdraw,
             ms: start.elapsed().as_secs_f64() * 1e3,

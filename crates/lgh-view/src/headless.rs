@@ -132,7 +132,9 @@ pub fn run(args: &ViewArgs, scene: Scene) -> Result<()> {
     record.start();
     for f in 0..frames {
         script_step(args, &mut state, f);
-        record.push(engine.render(&state)?);
+        let shown = engine.render(&state)?;
+        state.saw(&shown);
+        record.push(shown);
     }
     finish(args, &state, &record)
 }

@@ -37,6 +37,9 @@ pub fn readout(f: &ShownFrame, s: &ViewState) -> Vec<String> {
             None => format!("{} VPLs", f.vpls),
         },
     ];
+    if let Some(l) = st.lgh.only_level {
+        lines.push(format!("grid level {l} alone (G: next)"));
+    }
     if let Some((mean, max)) = f.overdraw {
         lines.push(format!("heat map: {mean:.0} lights per pixel, top {max}"));
     }

@@ -7,6 +7,8 @@ use lgh_render::RenderSettings;
 use lgh_render::methods::{brute, lgh, slc};
 use lgh_scene::{Camera, Light};
 
+use crate::engine::ShownFrame;
+
 /// One user action.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Action {
@@ -38,6 +40,8 @@ pub enum Action {
     NextComponent,
     /// The overdraw heat map (lights evaluated per pixel) instead of the image, or back.
     ToggleHeatmap,
+    /// The grid-level view: the lowest shaded level alone, the next, ... l_max, then all.
+    NextLevel,
 }
 
 /// Methods the viewer cycles through, with what they are.
@@ -49,7 +53,7 @@ pub const METHOD_CYCLE: [(lgh_render::Method, &str); 4] = [
 ];
 
 /// The keys, for the help text: (key, what it does).
-pub const CONTROLS: [(&str, &str); 17] = [
+pub const CONTROLS: [(&str, &str); 18] = [
     ("W/S", "move forward / back"),
     ("A/D", "move left / right"),
     ("Q/E", "move down / up"),
@@ -67,6 +71,10 @@ pub const CONTROLS: [(&str, &str); 17] = [
     ("J/L", "turn the light"),
     ("C", "show all / direct / indirect light"),
     ("V", "overdraw heat map (lights per pixel) on / off"),
+    (
+        "G",
+        "grid-level view: one level of the hierarchy alone, the next, ..., all",
+    ),
     ("H", "show / hide this help"),
     ("O", "show / hide the readout (fps, passes, lights)"),
     ("Esc", "quit"),
@@ -110,6 +118,9 @@ pub struct ViewState {
     pub taa: bool,
     /// Show the overdraw heat map (lights evaluated per pixel) instead of the image.
     pub heatmap: bool,
+    /// The levels the last frame's hierarchy shaded (lowest, l_max), if it had one: the
+    /// range the grid-level view steps through.
+    pub grid_levels: Option<(u32, u32)>,
     /// Length of a step, in scene units.
     pub step: f32,
     /// Incremented by every change: accumulation restarts when it moves.
@@ -130,6 +141,7 @@ impl ViewState {
             light_angle: 0.0,
             taa,
             heatmap: false,
+            grid_levels: None,
             step: radius / 20.0,
             version: 0,
         }
@@ -176,6 +188,11 @@ impl ViewState {
             }
         }
         out
+    }
+
+    /// Takes note of a frame shown: the levels of its hierarchy.
+    pub fn saw(&mut self, frame: &ShownFrame) {
+        self.grid_levels = frame.levels;
     }
 
     /// Applies `action`; returns a line saying what changed, for the terminal.
@@ -264,6 +281,18 @@ impl ViewState {
                 self.heatmap = !self.heatmap;
                 Some(format!("overdraw heat map: {}", self.heatmap))
             }
+            Action::NextLevel => {
+                s.lgh.only_level = match (s.lgh.only_level, self.grid_levels) {
+                    (None, Some((lowest, _))) => Some(lowest),
+                    (Some(l), Some((_, top))) if l < top => Some(l + 1),
+                    _ => None,
+                };
+                Some(match (s.lgh.only_level, self.grid_levels) {
+                    (Some(l), Some((_, top))) => format!("grid level {l} of {top} alone"),
+                    (None, None) => "grid-level view: needs a frame of lgh".to_string(),
+                    _ => "grid-level view: all levels".to_string(),
+                })
+            }
         };
         self.version += 1;
         said
@@ -297,6 +326,7 @@ pub fn action_of_key(key: &str) -> Option<Action> {
         "l" => Action::TurnLight(1),
         "c" => Action::NextComponent,
         "v" => Action::ToggleHeatmap,
+        "g" => Action::NextLevel,
         _ => return None,
     })
 }
@@ -363,5 +393,22 @@ mod tests {
             (position - Vec3::new(0.0, 2.0, -1.0)).length() < 1e-5,
             "{position}"
         );
+    }
+
+    /// G steps through the levels the last frame shaded, then back to all of them; before
+    /// any lgh frame it stays at all.
+    #[test]
+    fn the_grid_level_view_steps_through_the_levels() {
+        let mut v = state();
+        v.apply(action_of_key("g").unwrap());
+        assert_eq!(v.settings.lgh.only_level, None);
+        v.grid_levels = Some((1, 3));
+        let mut seen = Vec::new();
+        for _ in 0..4 {
+            v.apply(action_of_key("G").unwrap());
+            seen.push(v.settings.lgh.only_level);
+        }
+        assert_eq!(seen, [Some(1), Some(2), Some(3), None]);
+        assert!(v.settings.validate().is_ok());
     }
 }

@@ -110,6 +110,7 @@ fn work(
         }
         script_step(args, &mut state, frame);
         let shown = engine.render(&state)?;
+        state.saw(&shown);
         let lines = overlay::readout(&shown, &state);
         if let Ok(mut s) = slot.lock() {
             *s = Some((shown.pixels.clone(), lines));

@@ -10,10 +10,14 @@
 //! weight of vertex v at spacing h_l; the visibility of a representative then estimates the
 //! share-weighted visibility of the lights the grid light stands for, as brute force sums it.
 //!
-//! Sampling is the weighted reservoir of Efraimidis and Spirakis: every (source, vertex)
-//! pair draws the key E / w with E exponential from a hash, and each slot keeps the smallest
-//! key. A minimum does not depend on the order of the updates, so the parallel result is the
-//! same for every thread count. Each grid light has [`SLOTS`] independent slots.
+//! S_1 lights draw their [`SLOTS`] slots by inverse transform over the input lights of the 8
+//! cells around their vertex, stratified (one uniform per light, a random rotation of the
+//! strata over the slots, so that each slot alone is an exact draw). The cells' lights are
+//! visited in a fixed order, so the result is the same for every thread count; this costs
+//! two passes over the (light, vertex) pairs instead of an update of every slot per pair.
+//! Coarser levels chain: they use the weighted reservoir of Efraimidis and Spirakis, every
+//! (source, vertex) pair drawing the key E / w with E exponential from a hash and each slot
+//! keeping the smallest key, a minimum that does not depend on the order of the updates.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -56,61 +60,17 @@ pub fn representatives(
     construction: Construction,
     seed: u64,
 ) -> Vec<u32> {
-    let keys: Vec<AtomicU64> = (0..grid.len() * SLOTS)
-        .map(|_| AtomicU64::new(u64::MAX))
-        .collect();
+    let mut reps = vec![NONE; grid.len() * SLOTS];
     let rows = super::lookup::VertexRows::new(grid);
     let grid = Lookup::new(grid, &rows);
-    // S_1 from the input lights, visited in cell-row order so that the vertices and slots
-    // they update are near each other in memory (the result does not depend on the order).
-    // Each entry carries what the offer needs (cell, fraction, luminance), so that the
-    // visit reads memory in order instead of gathering the lights' arrays by index.
-    // Cells per axis at level 1 are a power of two: the key packs (z, y, x) in `b` bits each.
-    let b = grid.grid.geometry.cells_per_axis(1).trailing_zeros();
-    let mut order: Vec<(u64, u32, Vec3, f32)> = lights
-        .positions
-        .par_iter()
-        .zip(lights.intensity.par_iter())
+    let s1 = grid.grid.level_range(1);
+    let cells = CellRuns::new(&grid, lights);
+    reps[SLOTS * s1.start..SLOTS * s1.end]
+        .par_chunks_mut(SLOTS)
         .enumerate()
-        .map(|(i, (&p, &intensity))| {
-            let (c, f) = grid.locate(1, p);
-            (
-                (u64::from(c.z) << (2 * b)) | (u64::from(c.y) << b) | u64::from(c.x),
-                i as u32,
-                f,
-                luminance(intensity),
-            )
-        })
-        .collect();
-    order.par_sort_unstable_by_key(|e| (e.0, e.1));
-    order.par_iter().for_each(|&(key, i, f, lum)| {
-        let mask = (1u64 << b) - 1;
-        let c = UVec3::new(
-            (key & mask) as u32,
-            ((key >> b) & mask) as u32,
-            (key >> (2 * b)) as u32,
-        );
-        offer(&grid, &keys, 1, (c, f), lum, seed, u64::from(i), |_| i);
-    });
-    let reps_of = |level: u32| -> (std::ops::Range<usize>, Vec<u32>) {
-        let range = grid.grid.level_range(level);
-        let reps = keys[SLOTS * range.start..SLOTS * range.end]
-            .iter()
-            .map(|k| unpack(k.load(Ordering::Relaxed)))
-            .collect();
-        (range, reps)
-    };
-    let chain = |l: u32, from: u32, located: &(dyn Fn(usize) -> (UVec3, Vec3) + Sync)| {
-        let (range, reps) = reps_of(from);
-        range.clone().into_par_iter().for_each(|u| {
-            let k = u - range.start;
-            let reps = &reps[SLOTS * k..SLOTS * (k + 1)];
-            let lum = luminance(grid.grid.intensity[u]);
-            offer(&grid, &keys, l, located(u), lum, seed, u as u64, |s| {
-                reps[s]
-            });
+        .for_each_init(Vec::new, |scratch, (k, slots)| {
+            cells.draw_s1(&grid, s1.start + k, seed, scratch, slots);
         });
-    };
     // Levels above S_1 only if some are asked for (the chain of the restriction needs every
     // level below the ones it draws).
     let top = if from_level > grid.grid.l_max() {
@@ -118,19 +78,177 @@ pub fn representatives(
     } else {
         grid.grid.l_max()
     };
+    let keys: Vec<AtomicU64> = if top > 1 {
+        (0..grid.grid.len() * SLOTS)
+            .map(|_| AtomicU64::new(u64::MAX))
+            .collect()
+    } else {
+        Vec::new()
+    };
     for l in 2..=top {
+        // Light u of level `from` (its slots final in `reps`) offered to level l's vertices.
+        let chain = |from: u32, located: &(dyn Fn(usize) -> (UVec3, Vec3) + Sync)| {
+            let range = grid.grid.level_range(from);
+            range.into_par_iter().for_each(|u| {
+                let slots = &reps[SLOTS * u..SLOTS * (u + 1)];
+                let lum = luminance(grid.grid.intensity[u]);
+                offer(&grid, &keys, l, located(u), lum, seed, u as u64, |s| {
+                    slots[s]
+                });
+            });
+        };
         match construction {
             Construction::GatherFromS1 if l >= from_level => {
-                chain(l, 1, &|u| grid.locate(l, grid.grid.position[u]));
+                chain(1, &|u| grid.locate(l, grid.grid.position[u]));
             }
             Construction::GatherFromS1 => {}
             Construction::Restrict | Construction::ScatterAll => {
                 let r = grid.grid.geometry.cells_per_axis(l);
-                chain(l, l - 1, &|u| locate_finer_vertex(grid.grid.vertex[u], r));
+                chain(l - 1, &|u| locate_finer_vertex(grid.grid.vertex[u], r));
             }
         }
+        let range = grid.grid.level_range(l);
+        reps[SLOTS * range.start..SLOTS * range.end]
+            .par_iter_mut()
+            .zip(&keys[SLOTS * range.start..SLOTS * range.end])
+            .for_each(|(r, k)| *r = unpack(k.load(Ordering::Relaxed)));
     }
-    keys.into_iter().map(|k| unpack(k.into_inner())).collect()
+    reps
+}
+
+/// The input lights sorted by their level-1 cell, in runs of one cell each, with a table of
+/// where each cell row (y, z) starts among the runs: the lights around a vertex are then
+/// found by one table read and a search within a row, as [`Lookup::find`] finds vertices.
+struct CellRuns {
+    /// Per light in cell order: its index, in-cell fraction and luminance.
+    lights: Vec<(u32, Vec3, f32)>,
+    /// Per run: its cell's x, and where it starts in `lights` (one more entry at the end).
+    run_x: Vec<u32>,
+    run_start: Vec<u32>,
+    /// Per cell row z r + y (r cells per axis), where its runs start (one more at the end).
+    row_start: Vec<u32>,
+    /// Cells per axis at level 1.
+    r: u32,
+}
+
+impl CellRuns {
+    fn new(grid: &Lookup, lights: &InputLights) -> Self {
+        let r = grid.grid.geometry.cells_per_axis(1);
+        // Cells per axis at level 1 are a power of two: the key packs (z, y, x) in `b` bits
+        // each, so that key >> b is the row.
+        let b = r.trailing_zeros();
+        let mut order: Vec<(u64, u32, Vec3, f32)> = lights
+            .positions
+            .par_iter()
+            .zip(lights.intensity.par_iter())
+            .enumerate()
+            .map(|(i, (&p, &intensity))| {
+                let (c, f) = grid.locate(1, p);
+                (
+                    (u64::from(c.z) << (2 * b)) | (u64::from(c.y) << b) | u64::from(c.x),
+                    i as u32,
+                    f,
+                    luminance(intensity),
+                )
+            })
+            .collect();
+        order.par_sort_unstable_by_key(|e| (e.0, e.1));
+        let starts: Vec<u32> = (0..order.len())
+            .into_par_iter()
+            .filter(|&k| k == 0 || order[k].0 != order[k - 1].0)
+            .map(|k| k as u32)
+            .collect();
+        let mask = (1u64 << b) - 1;
+        let run_x = starts
+            .iter()
+            .map(|&k| (order[k as usize].0 & mask) as u32)
+            .collect();
+        let rows = r as usize * r as usize;
+        let mut row_start = vec![0u32; rows + 1];
+        for &k in &starts {
+            row_start[(order[k as usize].0 >> b) as usize + 1] += 1;
+        }
+        for k in 1..=rows {
+            row_start[k] += row_start[k - 1];
+        }
+        let mut run_start = starts;
+        run_start.push(order.len() as u32);
+        let lights = order
+            .into_par_iter()
+            .map(|(_, i, f, lum)| (i, f, lum))
+            .collect();
+        Self {
+            lights,
+            run_x,
+            run_start,
+            row_start,
+            r,
+        }
+    }
+
+    /// The lights of cell `c`, if any.
+    fn cell(&self, c: UVec3) -> &[(u32, Vec3, f32)] {
+        let row = (c.z * self.r + c.y) as usize;
+        let (a, b) = (
+            self.row_start[row] as usize,
+            self.row_start[row + 1] as usize,
+        );
+        match self.run_x[a..b].binary_search(&c.x) {
+            Ok(k) => {
+                let run = a + k;
+                &self.lights[self.run_start[run] as usize..self.run_start[run + 1] as usize]
+            }
+            Err(_) => &[],
+        }
+    }
+
+    /// Fills the [`SLOTS`] slots of S_1 light `j` with input lights drawn in proportion to
+    /// w_1(p_i) lum(I_i), stratified: one uniform u, slot (s + o) mod [`SLOTS`] takes the
+    /// light where the cumulative share crosses (s + u) / [`SLOTS`] of the total. The offset o
+    /// is uniform too, so every slot alone has exactly the share distribution (and the
+    /// chain of the coarser levels, which reads one slot, stays exact), while the slots
+    /// together cover the light's VPLs more evenly than independent draws.
+    fn draw_s1(
+        &self,
+        grid: &Lookup,
+        j: usize,
+        seed: u64,
+        scratch: &mut Vec<(f32, u32)>,
+        slots: &mut [u32],
+    ) {
+        scratch.clear();
+        let v = grid.grid.vertex[j];
+        let mut total = 0.0f32;
+        for corner in 0..8u32 {
+            let d = UVec3::new(corner & 1, (corner >> 1) & 1, corner >> 2);
+            // The cell whose corner d is vertex v.
+            if v.cmplt(d).any() || (v - d).cmpge(UVec3::splat(self.r)).any() {
+                continue;
+            }
+            for &(i, f, lum) in self.cell(v - d) {
+                let w = corner_weight(f, d) * lum;
+                if w > 0.0 {
+                    total += w;
+                    scratch.push((total, i));
+                }
+            }
+        }
+        let Some(&(_, last)) = scratch.last() else {
+            return;
+        };
+        let bits = hash(&[seed, 1, j as u64]);
+        // 21 bits, so that s + u is exact in f32.
+        let u = (bits >> 43) as f32 * (1.0 / (1u64 << 21) as f32);
+        let o = (bits & (SLOTS as u64 - 1)) as usize;
+        let mut at = 0;
+        for s in 0..SLOTS {
+            let target = (s as f32 + u) * (1.0 / SLOTS as f32) * total;
+            while at < scratch.len() && scratch[at].0 <= target {
+                at += 1;
+            }
+            slots[(s + o) % SLOTS] = scratch.get(at).map_or(last, |e| e.1);
+        }
+    }
 }
 
 /// The representative packed in a key (its low 32 bits), or [`NONE`].

@@ -48,8 +48,8 @@ impl TileBins {
         (y / self.tile * self.tiles_x + x / self.tile) as usize
     }
 
-    /// Bins spheres (`centres[i]`, `radii[i]`; infinite radius = everywhere) into tiles of
-    /// `tile` pixels over the G-buffer `g` seen through `frame`.
+    /// Bins spheres (`centres[i]`, `radii[i]`; infinite radius = everywhere, a negative or
+    /// NaN one nowhere) into tiles of `tile` pixels over the G-buffer `g` seen through `frame`.
     #[must_use]
     pub fn build(
         g: &GBuffer,
@@ -109,6 +109,9 @@ impl TileBins {
             .map(|start| {
                 let mut pairs = Vec::new();
                 for i in start..(start + BIN_CHUNK).min(centres.len()) {
+                    if radii[i].is_nan() || radii[i] < 0.0 {
+                        continue;
+                    }
                     let Some([x0, y0, x1, y1]) =
                         screen_rect(frame, g.width, g.height, centres[i], radii[i])
                     else {
@@ -389,8 +392,8 @@ pub struct InterleavedBins {
 }
 
 impl InterleavedBins {
-    /// Bins spheres (`centres[i]`, `radii[i]`) of sub-image `sub[i]` (< n^2) into the tiles
-    /// of their sub-image, in parallel over sub-images.
+    /// Bins spheres (`centres[i]`, `radii[i]`, as [`TileBins::build`]) of sub-image `sub[i]`
+    /// (< n^2) into the tiles of their sub-image, in parallel over sub-images.
     #[must_use]
     pub fn build(
         g: &GBuffer,

@@ -554,3 +554,36 @@ fn the_tile_size_does_not_change_the_image() {
         assert_eq!(run(Some(tile)), auto, "tile {tile}");
     }
 }
+
+/// The grid-level view (`--only-level`): without shadows, the images of the levels one at a
+/// time sum to the full image (each light is shaded through its own level's blending
+/// function, whatever else is shown), and every level alone is only part of it.
+#[test]
+fn the_levels_alone_sum_to_the_full_image() {
+    let world = cornell();
+    let full = render(&world, LGH_UNSHADOWED, 4000, LghSettings::default());
+    let levels = full.stats::<LghStats>().expect("lgh statistics").levels;
+    let mut sum = vec![glam::Vec3::ZERO; full.image.pixels.len()];
+    for level in 0..=levels {
+        let part = render(
+            &world,
+            LGH_UNSHADOWED,
+            4000,
+            LghSettings {
+                only_level: Some(level),
+                ..LghSettings::default()
+            },
+        );
+        let d = diff(&part.image, &full.image).unwrap();
+        assert!(d.rel_bias < -0.01, "level {level} alone: {d:?}");
+        for (s, p) in sum.iter_mut().zip(&part.image.pixels) {
+            *s += *p;
+        }
+    }
+    let summed = lgh_render::Image::from_pixels(full.image.width, full.image.height, sum);
+    let d = diff(&summed, &full.image).unwrap();
+    assert!(
+        d.rel_rmse < 1e-4,
+        "sum of the levels against the full image: {d:?}"
+    );
+}

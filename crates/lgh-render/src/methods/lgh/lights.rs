@@ -168,6 +168,17 @@ impl ShadeLights {
         }
     }
 
+    /// Leaves only the lights of level `level` in view: the others get a negative reach,
+    /// which the tile binning skips, so no pixel shades them and none is a shadow candidate
+    /// (their indices, which the unbiased estimate's walk uses, stay as they are).
+    pub(super) fn show_only_level(&mut self, level: u32) {
+        for (reach, &l) in self.reach.iter_mut().zip(&self.level) {
+            if u32::from(l) != level {
+                *reach = -1.0;
+            }
+        }
+    }
+
     /// Adds the representatives of the lights that [`ShadeLights::add_hierarchy`] added for
     /// the same `grid` and `lowest` level: [`SLOTS`] per light, drawn for the shadow
     /// candidates (levels >= `from_level`; a VPL of level 0 is its own), empty slots

@@ -235,6 +235,9 @@ pub fn render_lgh(
     }
     let lighting_start = Instant::now();
     stats.shaded_lights = lights.position.len();
+    if let Some(level) = settings.only_level {
+        lights.show_only_level(level);
+    }
     let bins = InterleavedBins::build(
         g,
         frame,

@@ -63,6 +63,12 @@ pub struct LghSettings {
     /// the hierarchy's approximation (docs/design.md, "Unbiased estimate").
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = LghSettings::default().estimator))]
     pub estimator: Estimator,
+    /// lgh: shade the lights of this level only (0 = the VPLs themselves, with
+    /// `--start-level 0`): what one level of the hierarchy adds to the image through its
+    /// blending function. The rest of the method is unchanged, so the images of all levels
+    /// sum to the full image (the grid-level view of `lgh view`, key G).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "LEVEL"))]
+    pub only_level: Option<u32>,
 }
 
 /// What the shadow samples of `lgh` estimate (docs/design.md, "Unbiased estimate").
@@ -127,6 +133,7 @@ impl Default for LghSettings {
             jitter: JitterAt::Ray,
             shadow_target: ShadowTarget::Representative,
             estimator: Estimator::Unbiased,
+            only_level: None,
         }
     }
 }
