@@ -17,7 +17,7 @@ pub const BASE_BYTES: u64 = 48 << 20;
 pub const BYTES_PER_PIXEL: u64 = 320;
 /// Bytes per VPL: the VPL itself and its share of every level of the lighting grid hierarchy
 /// (or of the light tree of `slc`).
-pub const BYTES_PER_VPL: u64 = 560;
+pub const BYTES_PER_VPL: u64 = 680;
 /// Bytes per triangle: the mesh as loaded and its BVH.
 pub const BYTES_PER_TRIANGLE: u64 = 400;
 

@@ -33,7 +33,7 @@ use crate::rng::hash;
 /// Independent representatives drawn per grid light. The set is fixed for a frame, so its
 /// randomness is correlated over the image; more slots spread it, at a cost linear in the
 /// slots (docs/design.md, "Shadow targets").
-pub const SLOTS: usize = 8;
+pub const SLOTS: usize = 16;
 
 /// No representative (a slot that no input light reached).
 pub const NONE: u32 = u32::MAX;
