@@ -11,9 +11,9 @@ use lgh_render::frame::render_frame_with;
 use lgh_render::image::ImageFormat;
 use lgh_render::image::metrics::{diff, display_bytes, flip_mean};
 use lgh_render::methods::brute::BRUTE;
-use lgh_render::methods::lgh::{Estimator, LGH, LghSettings};
+use lgh_render::methods::lgh::{LGH, LghSettings};
 use lgh_render::methods::slc::{SLC, SLC_CLAMPED};
-use lgh_render::settings::ShadowSettings;
+use lgh_render::settings::{DEMO_FILTER_COLOR, ShadowSettings};
 use lgh_render::{Component, Frame, FrameMemory, Image, RenderSettings, Silent, World};
 
 use crate::bench_cmd::{BenchOptions, open_scene};
@@ -108,7 +108,8 @@ fn series(base: &RenderSettings) -> Vec<(&'static str, String, RenderSettings)> 
         ..ShadowSettings::default()
     };
     for k in [1, 4, 16] {
-        // The defaults: the unbiased estimate, alpha 4, the VPLs near the pixel, 4 x 4.
+        // The defaults: the unbiased estimate, alpha 3, six normal bins, the VPLs near the
+        // pixel, 4 x 4.
         let lgh = RenderSettings {
             method: LGH,
             shadows: shadows(k),
@@ -116,14 +117,11 @@ fn series(base: &RenderSettings) -> Vec<(&'static str, String, RenderSettings)> 
         };
         let mut plain = lgh.clone();
         plain.tiling.interleave = Some(1);
-        // The paper: alpha 1 (and 2), S_1 first, candidates from S_2, no interleaving.
+        // The paper: alpha 1 (and 2), S_1 first, candidates from S_2, no interleaving, one
+        // hierarchy, the demo's filter.
         let mut paper = lgh.clone();
-        paper.lgh = LghSettings {
-            estimator: Estimator::Paper,
-            alpha: 1.0,
-            start_level: 1,
-            ..LghSettings::default()
-        };
+        paper.lgh = LghSettings::paper();
+        paper.shadows.filter_color = DEMO_FILTER_COLOR;
         paper.tiling.interleave = Some(1);
         let mut paper2 = paper.clone();
         paper2.lgh.alpha = 2.0;

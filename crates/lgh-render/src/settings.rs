@@ -59,9 +59,14 @@ pub struct ShadowSettings {
     pub filter_passes: u32,
     /// lgh, slc: the a-trous filter's colour weight c_phi of its first pass (Dammertz et al.
     /// 2010; halved every pass): larger smooths the shadow ratio more across its own edges.
+    /// The demo's is 0.5 ([`DEMO_FILTER_COLOR`]); 0.1 measured more accurate for both methods
+    /// (docs/design.md, "Defaults").
     #[cfg_attr(feature = "clap", arg(long, default_value_t = ShadowSettings::default().filter_color))]
     pub filter_color: f32,
 }
+
+/// The LGH demo's colour weight of the a-trous filter (its c_phi).
+pub const DEMO_FILTER_COLOR: f32 = 0.5;
 
 impl Default for ShadowSettings {
     fn default() -> Self {
@@ -69,7 +74,7 @@ impl Default for ShadowSettings {
             samples: 4,
             filter: ShadowFilter::Atrous,
             filter_passes: 5,
-            filter_color: 0.5,
+            filter_color: 0.1,
         }
     }
 }

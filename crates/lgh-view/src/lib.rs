@@ -82,13 +82,17 @@ pub const INTERACTIVE_ALPHA: f32 = 1.0;
 impl ViewArgs {
     /// Starts at interactive settings where the command line leaves them (`given(id)` tells
     /// whether the flag of clap id `id` was given): alpha [`INTERACTIVE_ALPHA`] and S_1 the
-    /// lowest level shaded, instead of the render defaults, which favour accuracy.
+    /// lowest level shaded, one hierarchy (no normal bins), instead of the render defaults,
+    /// which favour accuracy.
     pub fn use_interactive_defaults(&mut self, given: impl Fn(&str) -> bool) {
         if !given("alpha") {
             self.settings.lgh.alpha = INTERACTIVE_ALPHA;
         }
         if !given("start_level") {
             self.settings.lgh.start_level = 1;
+        }
+        if !given("normal_bins") {
+            self.settings.lgh.normal_bins = false;
         }
     }
 

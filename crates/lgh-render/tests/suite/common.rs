@@ -156,12 +156,7 @@ pub fn small_indirect(method: lgh_render::Method, vpls: usize) -> lgh_render::Re
 /// shaded (the project's defaults differ; docs/design.md, "Defaults"); with
 /// [`no_interleave`] its tiling.
 pub fn paper_lgh() -> lgh_render::methods::lgh::LghSettings {
-    lgh_render::methods::lgh::LghSettings {
-        estimator: lgh_render::methods::lgh::Estimator::Paper,
-        alpha: 1.0,
-        start_level: 1,
-        ..Default::default()
-    }
+    lgh_render::methods::lgh::LghSettings::paper()
 }
 
 /// No interleaved sampling (the paper's default; the project's `lgh` interleaves 4 x 4).

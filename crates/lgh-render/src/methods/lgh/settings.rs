@@ -33,10 +33,10 @@ pub struct LghSettings {
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = LghSettings::default().construction))]
     pub construction: Construction,
     /// lgh: build six hierarchies, one per dominant normal direction of the VPLs (an
-    /// extension of the paper: grid lights then average only normals that roughly agree).
-    /// Better than one hierarchy with `--grid-emission mean-normal`, worse than the default
-    /// emission (docs/design.md, "Normal bins").
-    #[cfg_attr(feature = "clap", arg(long))]
+    /// extension of the paper, the default: grid lights then average only normals that
+    /// roughly agree, where one hierarchy mixes the opposite faces of columns and furniture;
+    /// docs/design.md, "Normal bins"). `--normal-bins false` builds the paper's one hierarchy.
+    #[cfg_attr(feature = "clap", arg(long, num_args = 0..=1, default_value_t = LghSettings::default().normal_bins, default_missing_value = "true", value_name = "BOOL"))]
     pub normal_bins: bool,
     /// lgh: place the hierarchy's grids at a random offset drawn from the seed, so that
     /// frames of different seeds cluster the VPLs differently (`--accumulate` turns it on).
@@ -121,13 +121,13 @@ pub enum JitterAt {
 impl Default for LghSettings {
     fn default() -> Self {
         Self {
-            alpha: 4.0,
+            alpha: 3.0,
             levels: LevelCount::Auto,
             shadow_from_level: 2,
             start_level: 0,
             dev_scale: 0.5,
             construction: Construction::Restrict,
-            normal_bins: false,
+            normal_bins: true,
             grid_jitter: false,
             emission: GridEmission::EnergyConserving,
             jitter: JitterAt::Ray,
@@ -139,6 +139,20 @@ impl Default for LghSettings {
 }
 
 impl LghSettings {
+    /// The paper's LGH (Lin & Yuksel 2019, sections 3.2-3.3 and its measurements): its
+    /// shadow estimate, alpha 1, S_1 the lowest level shaded, one hierarchy; the rest (the
+    /// representatives' shadow targets, the energy-conserving emission) as the defaults.
+    #[must_use]
+    pub fn paper() -> Self {
+        Self {
+            estimator: Estimator::Paper,
+            alpha: 1.0,
+            start_level: 1,
+            normal_bins: false,
+            ..Self::default()
+        }
+    }
+
     /// The lowest level whose lights are shadow candidates: every shaded level for the
     /// unbiased estimate, `shadow_from_level` for the paper's.
     #[must_use]
