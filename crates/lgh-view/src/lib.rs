@@ -76,7 +76,7 @@ pub struct ViewArgs {
 }
 
 /// The viewer's alpha when `--alpha` is not given: the paper's 1, for interactive rates (the
-/// render default, 4, measured 3.1 fps where this gives 6.0; docs/performance.md).
+/// render defaults measured 3.1 fps where this gave 6.0; docs/performance.md).
 pub const INTERACTIVE_ALPHA: f32 = 1.0;
 
 impl ViewArgs {
