@@ -507,3 +507,38 @@ fn malformed_inputs_that_used_to_crash_are_refused() {
         &["--vpls 100000000"],
     );
 }
+
+/// `--normal-bins` (on by default) is switched off with `=false`, and alone before the scene
+/// it takes no value, so the scene stays the scene.
+#[test]
+fn normal_bins_take_an_optional_value() {
+    let d = temp_dir("bins");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/test/two-rooms.toml");
+    let bins = |args: &[&str]| -> serde_json::Value {
+        let stats = d.join("s.json");
+        let out = lgh(&[
+            &["render", "--size", "16x9", "--vpls", "200", "--quiet"][..],
+            &["--out", s(&d.join("o.png")), "--stats", s(&stats)],
+            args,
+        ]
+        .concat());
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        json
+    };
+    let on = bins(&["--normal-bins", s(&scene)]);
+    assert_eq!(on["settings"]["lgh"]["normal_bins"], true);
+    assert!(on["scene"].as_str().unwrap().contains("two-rooms"), "{on}");
+    assert_eq!(bins(&[])["settings"]["lgh"]["normal_bins"], true);
+    let off = bins(&["--normal-bins=false"]);
+    assert_eq!(off["settings"]["lgh"]["normal_bins"], false);
+    assert_error(
+        &lgh(&["render", "--normal-bins=maybe"]),
+        &["--normal-bins", "maybe"],
+    );
+}

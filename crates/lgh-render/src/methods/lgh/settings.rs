@@ -35,8 +35,8 @@ pub struct LghSettings {
     /// lgh: build six hierarchies, one per dominant normal direction of the VPLs (an
     /// extension of the paper, the default: grid lights then average only normals that
     /// roughly agree, where one hierarchy mixes the opposite faces of columns and furniture;
-    /// docs/design.md, "Normal bins"). `--normal-bins false` builds the paper's one hierarchy.
-    #[cfg_attr(feature = "clap", arg(long, num_args = 0..=1, default_value_t = LghSettings::default().normal_bins, default_missing_value = "true", value_name = "BOOL"))]
+    /// docs/design.md, "Normal bins"). `--normal-bins=false` builds the paper's one hierarchy.
+    #[cfg_attr(feature = "clap", arg(long, num_args = 0..=1, require_equals = true, default_value_t = LghSettings::default().normal_bins, default_missing_value = "true", value_name = "BOOL"))]
     pub normal_bins: bool,
     /// lgh: place the hierarchy's grids at a random offset drawn from the seed, so that
     /// frames of different seeds cluster the VPLs differently (`--accumulate` turns it on).
