@@ -30,9 +30,10 @@ use super::{Construction, InputLights, LightingGrid};
 use crate::color::luminance;
 use crate::rng::hash;
 
-/// Independent representatives drawn per grid light. The set is fixed for a frame, so its
-/// randomness is correlated over the image; more slots spread it, at a cost linear in the
-/// slots (docs/design.md, "Shadow targets").
+/// Representatives drawn per grid light (stratified at S_1, independent above; a power of
+/// two). The set is fixed for a frame, so its randomness is correlated over the image; more
+/// slots spread it, at the cost of evaluating each of them per shadow sample
+/// (docs/design.md, "Shadow targets").
 pub const SLOTS: usize = 16;
 
 /// No representative (a slot that no input light reached).
@@ -237,8 +238,8 @@ impl CellRuns {
             return;
         };
         let bits = hash(&[seed, 1, j as u64]);
-        // 21 bits, so that s + u is exact in f32.
-        let u = (bits >> 43) as f32 * (1.0 / (1u64 << 21) as f32);
+        // As many bits as leave s + u exact in f32's 24-bit significand for every s.
+        let u = (bits >> (64 - U_BITS)) as f32 * (1.0 / (1u64 << U_BITS) as f32);
         let o = (bits & (SLOTS as u64 - 1)) as usize;
         let mut at = 0;
         for s in 0..SLOTS {
@@ -250,6 +251,9 @@ impl CellRuns {
         }
     }
 }
+
+/// Bits of the stratified draw's uniform: s + u, s < [`SLOTS`], is then exact in f32.
+const U_BITS: u32 = 24 - SLOTS.trailing_zeros();
 
 /// The representative packed in a key (its low 32 bits), or [`NONE`].
 fn unpack(key: u64) -> u32 {
