@@ -24,6 +24,25 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// Runs `lgh render` with `args` at 32x18 and 200 VPLs, its image and statistics written in
+/// `d`; asserts success and returns the statistics.
+fn render_stats(d: &Path, args: &[&str]) -> serde_json::Value {
+    let (out_file, stats) = (d.join("out.exr"), d.join("stats.json"));
+    let base = ["render", "--size", "32x18", "--vpls", "200", "--quiet"];
+    let out = lgh(&[
+        &base[..],
+        &["--out", s(&out_file), "--stats", s(&stats)],
+        args,
+    ]
+    .concat());
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap()
+}
+
 /// Fails with exit code 2, one line on stderr that contains every `needles`, and no output.
 fn assert_error(out: &Output, needles: &[&str]) {
     let err = String::from_utf8_lossy(&out.stderr);
@@ -377,23 +396,7 @@ fn bench_temporal_reports_flicker_with_and_without_the_filter() {
 #[test]
 fn accumulate_and_bench_quality() {
     let d = temp_dir("quality");
-    let stats = d.join("a.json");
-    let out_file = d.join("a.exr");
-    let accumulate = |extra: &[&str]| {
-        let base = [
-            "render", "--size", "32x18", "--vpls", "200", "--quiet", "--out",
-        ];
-        let args = [&base[..], &[s(&out_file), "--stats", s(&stats)], extra].concat();
-        let out = lgh(&args);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let json: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
-        json
-    };
+    let accumulate = |extra: &[&str]| render_stats(&d, extra);
     let json = accumulate(&["--accumulate", "3"]);
     assert_eq!(json["accumulated_frames"], 3);
     // Frames of an accumulation take 16 shadow samples, unless --shadow-samples is given.
@@ -514,23 +517,7 @@ fn malformed_inputs_that_used_to_crash_are_refused() {
 fn normal_bins_take_an_optional_value() {
     let d = temp_dir("bins");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/test/two-rooms.toml");
-    let bins = |args: &[&str]| -> serde_json::Value {
-        let stats = d.join("s.json");
-        let out = lgh(&[
-            &["render", "--size", "16x9", "--vpls", "200", "--quiet"][..],
-            &["--out", s(&d.join("o.png")), "--stats", s(&stats)],
-            args,
-        ]
-        .concat());
-        assert!(
-            out.status.success(),
-            "{args:?}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let json: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
-        json
-    };
+    let bins = |args: &[&str]| render_stats(&d, args);
     let on = bins(&["--normal-bins", s(&scene)]);
     assert_eq!(on["settings"]["lgh"]["normal_bins"], true);
     assert!(on["scene"].as_str().unwrap().contains("two-rooms"), "{on}");
