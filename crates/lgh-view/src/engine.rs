@@ -140,16 +140,15 @@ impl FrameLoop {
             .par_chunks_exact(3)
             .map(|c| (u32::from(c[0]) << 16) | (u32::from(c[1]) << 8) | u32::from(c[2]))
             .collect();
+        let lgh_stats = frame.stats::<LghStats>();
         let shown = ShownFrame {
             image: Image::from_pixels(frame.image.width, frame.image.height, mean),
             pixels: packed,
             exposure,
             timings: frame.timings.0.clone(),
             vpls: frame.vpls.vpls.len(),
-            grid_lights: frame.stats::<LghStats>().map(|s| s.grid_lights),
-            levels: frame
-                .stats::<LghStats>()
-                .map(|s| (state.settings.lgh.start_level.min(1), s.levels)),
+            grid_lights: lgh_stats.map(|s| s.grid_lights),
+            levels: lgh_stats.map(|s| (state.settings.lgh.start_level.min(1), s.levels)),
             accumulated: self.accumulated,
             overdraw,
             ms: start.elapsed().as_secs_f64() * 1e3,
