@@ -195,3 +195,23 @@ pub fn offer(
         r.update_jump(&sample, lum, || rng.next_f32());
     }
 }
+
+/// Passes over lights of total weight `sum` that no reservoir of the pixel would take: if
+/// adding `sum` leaves every reservoir's total below its replacement threshold
+/// ([`Reservoir::update_jump`]), the totals grow by `sum` and true is returned; otherwise
+/// nothing changes and the lights must be offered one by one with [`offer`]. Taking a run
+/// of lights at once is the same decision as offering them in turn, up to the rounding of
+/// the total.
+#[inline]
+pub fn pass_over(res: &mut [Reservoir<ShadowSample>], sum: f32) -> bool {
+    if !(sum >= 0.0 && sum.is_finite()) {
+        return false;
+    }
+    if res.iter().any(|r| r.total + sum >= r.threshold) {
+        return false;
+    }
+    for r in res {
+        r.total += sum;
+    }
+    true
+}

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use lgh_core::lighting_grid::LevelCount;
 use lgh_core::vpl::GridEmission;
-use lgh_render::image::metrics::diff;
+use lgh_render::image::metrics::{diff, mean_luminance};
 use lgh_render::methods::brute::{BRUTE, BRUTE_UNSHADOWED};
 use lgh_render::methods::lgh::{
     JitterAt, LGH, LGH_UNSHADOWED, LghSettings, LghStats, ShadowTarget,
@@ -531,7 +531,9 @@ fn interleaving_keeps_the_image_and_divides_the_work() {
 
 /// The tile size only decides which lights a pixel tests, never which it shades: with 4 x 4
 /// interleaving and shadows, the default tile (4 sub-image pixels) and tiles of 16 and 1 give
-/// the same image, bit for bit (the tile lists keep the lights in the same order).
+/// the same image up to the rounding of the sums (the lighting loop sums its lights lane by
+/// lane, and a tile's list decides which lane a light lands in). Tolerance: max_abs below
+/// 1e-4 of the image's mean luminance (a light lost or shaded twice moves a pixel by far more).
 #[test]
 fn the_tile_size_does_not_change_the_image() {
     let world = cornell();
@@ -549,9 +551,11 @@ fn the_tile_size_does_not_change_the_image() {
         common::render(&world, &s).image
     };
     let auto = run(None);
-    assert!(auto.pixels.iter().any(|p| p.max_element() > 0.0));
+    let mean = mean_luminance(&auto);
+    assert!(mean > 0.0);
     for tile in [1, 16] {
-        assert_eq!(run(Some(tile)), auto, "tile {tile}");
+        let m = diff(&run(Some(tile)), &auto).expect("same size");
+        assert!(m.max_abs < 1e-4 * mean, "tile {tile}: {m:?}, mean {mean}");
     }
 }
 

@@ -14,7 +14,7 @@ use crate::methods::lgh::light_batch::{LANES, LightBatch, PackedLight};
 use crate::methods::lgh::lights::ShadeLights;
 use crate::methods::lgh::settings::{JitterAt, LghSettings};
 use crate::passes::gbuffer::GBuffer;
-use crate::shading::reservoirs::{ReservoirLayout, ShadowSample, halves, offer};
+use crate::shading::reservoirs::{ReservoirLayout, ShadowSample, halves, offer, pass_over};
 use crate::shading::tiles::InterleavedBins;
 
 /// Random-stream tag of the LGH lighting pass.
@@ -77,27 +77,51 @@ pub(super) fn shade_row(
             batch.fill(key, packed, bins.lights_at(x as u32, y as u32));
         }
         let batch = &*batch;
+        // A summed lane by lane over the chunks, reduced once per pixel.
+        let mut sum = [[0.0f32; LANES]; 3];
         for chunk in 0..batch.chunks() {
             let lanes = batch.eval(chunk, xp, n, eps2);
-            for lane in 0..LANES {
-                if !lanes.reached[lane] {
+            *overdraw += lanes.reached.iter().map(|&r| u32::from(r)).sum::<u32>();
+            for (s, v) in sum.iter_mut().zip(&lanes.value) {
+                for l in 0..LANES {
+                    s[l] += v[l];
+                }
+            }
+            if k == 0 {
+                continue;
+            }
+            // The selection weights f_j of the chunk's candidates (zero below the first
+            // candidate level). When no reservoir's replacement threshold is reached by the
+            // chunk's total, none takes any of its lights: the totals grow by the sum and
+            // the lights are passed over without a look (the common case once the
+            // reservoirs hold a sample; Reservoir::update_jump).
+            let mut lum = [0.0f32; LANES];
+            for (l, f) in lum.iter_mut().enumerate() {
+                let c = Vec3::new(lanes.value[0][l], lanes.value[1][l], lanes.value[2][l]);
+                *f = luminance(c);
+            }
+            if candidates_from > 0 {
+                let levels = &batch.level[chunk * LANES..((chunk + 1) * LANES).min(batch.len())];
+                for (f, &l) in lum.iter_mut().zip(levels) {
+                    if u32::from(l) < candidates_from {
+                        *f = 0.0;
+                    }
+                }
+            }
+            if settings.jitter == JitterAt::Ray && pass_over(res, lum.iter().sum()) {
+                continue;
+            }
+            for (lane, &f) in lum.iter().enumerate() {
+                if f == 0.0 {
                     continue;
                 }
-                *overdraw += 1;
                 let bc = Vec3::new(
                     lanes.value[0][lane],
                     lanes.value[1][lane],
                     lanes.value[2][lane],
                 );
-                if bc == Vec3::ZERO {
-                    continue;
-                }
                 let e = chunk * LANES + lane;
-                let (j, l) = (batch.index[e] as usize, batch.level[e]);
-                *a += bc;
-                if k == 0 || (l as u32) < candidates_from {
-                    continue;
-                }
+                let j = batch.index[e] as usize;
                 let pl = &packed[j];
                 if settings.jitter == JitterAt::Ray {
                     // The target is drawn after selection; the light is read only if a
@@ -114,7 +138,7 @@ pub(super) fn shade_row(
                         light: j as u32,
                         gain: Vec3::ONE,
                     };
-                    offer(res, sample, luminance(bc), &mut rng);
+                    offer(res, sample, f, &mut rng);
                     continue;
                 }
                 let (p, nj, iso, ij) = (pl.position, pl.normal, pl.iso, pl.intensity);
@@ -152,5 +176,6 @@ pub(super) fn shade_row(
                 offer(res, || sample, luminance(sample.f), &mut rng);
             }
         }
+        *a += Vec3::from(sum.map(|s| s.iter().sum::<f32>()));
     }
 }
