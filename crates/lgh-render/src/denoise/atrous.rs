@@ -93,6 +93,9 @@ const GUIDE: usize = 12;
 /// The hit plane (1 where the pixel sees a surface, else 0).
 const HIT: usize = 13;
 
+/// Exponent of the edge-stopping weight beyond which a tap counts as zero ([`weight_row`]).
+const NEGLIGIBLE: f32 = 40.0;
+
 /// Pixels processed together in the inner loop: fixed-size blocks vectorise reliably.
 const LANES: usize = 8;
 
@@ -163,7 +166,7 @@ pub struct AtrousBuffers {
     fixed: Vec<f32>,
     cur: Vec<f32>,
     next: Vec<f32>,
-    /// The weight ring ([`filter_band`]) of each worker thread.
+    /// The weight ring ([`filter_chain`]) of each worker thread.
     rings: Vec<Mutex<Vec<f32>>>,
     /// The layout (stride, padding, width, height) the buffers were last laid out for:
     /// their padding and the pixels beyond the width are zero.
@@ -264,15 +267,19 @@ pub fn filter_ratio_pair_in_place(
             fixed,
             dynamic: cur,
         };
-        // Bands of output rows in parallel; each task writes its rows of the 7 output
-        // planes. A band recomputes the weights of the 2 step rows above it (its halo).
-        let band = (8 * step).max(32);
-        let mut bands: Vec<Vec<&mut [f32]>> = (0..h.div_ceil(band))
-            .map(|_| Vec::with_capacity(7))
+        // The taps of a pass join only rows of the same residue y mod step (a chain of rows
+        // `step` apart). Each task filters a stretch of one chain: its rows of the 7 output
+        // planes, one slice per plane and row, and recomputes the weights of the 2 chain rows
+        // above its first (its halo).
+        let chains = Chains::new(h, step);
+        let mut tasks: Vec<Vec<Vec<&mut [f32]>>> = chains
+            .stretches()
+            .map(|(_, rows)| (0..rows.len()).map(|_| Vec::with_capacity(7)).collect())
             .collect();
         for plane_rows in next.chunks_mut(plane) {
-            for (bi, rows) in plane_rows.chunks_mut(band * layout.stride).enumerate() {
-                bands[bi].push(rows);
+            for (y, row) in plane_rows.chunks_mut(layout.stride).enumerate() {
+                let (task, local) = chains.task_of(y);
+                tasks[task][local].push(row);
             }
         }
         let threads = rayon::current_num_threads();
@@ -280,21 +287,26 @@ pub fn filter_ratio_pair_in_place(
             rings.resize_with(threads, Mutex::default);
         }
         let rings = &*rings;
-        bands.into_par_iter().enumerate().for_each(|(bi, mut out)| {
-            let rows = bi * band..((bi + 1) * band).min(h);
-            // This thread's ring: never contended (the band spawns no work of its own).
-            let me = rayon::current_thread_index().unwrap_or(0) % rings.len();
-            let mut ring = rings[me].lock().unwrap_or_else(PoisonError::into_inner);
-            filter_band(
-                &src,
-                &mut out,
-                w,
-                rows,
-                step,
-                [inv_c, inv_n, inv_p],
-                &mut ring,
-            );
-        });
+        tasks
+            .into_par_iter()
+            .zip(chains.stretches().collect::<Vec<_>>())
+            .for_each(|(mut out, (residue, rows))| {
+                // This thread's ring: never contended (the task spawns no work of its own).
+                let me = rayon::current_thread_index().unwrap_or(0) % rings.len();
+                let mut ring = rings[me].lock().unwrap_or_else(PoisonError::into_inner);
+                filter_chain(
+                    &src,
+                    &mut out,
+                    w,
+                    Chain {
+                        residue,
+                        rows,
+                        step,
+                    },
+                    [inv_c, inv_n, inv_p],
+                    &mut ring,
+                );
+            });
         std::mem::swap(&mut cur, &mut next);
     }
     // Pixels that see nothing keep their input values.
@@ -337,40 +349,105 @@ const FORWARD: [(isize, isize); 12] = [
     (2, 2),
 ];
 
-/// Output rows `rows` of one pass: `out` holds the rows' S r, g, b, U r, g, b and guide
-/// (padded like the planes, one slice per plane). Row by row, the weights of the
-/// [`FORWARD`] taps are computed once into `ring` (which keeps the last 2 step + 1 rows'
-/// weights) and serve both the row itself and, mirrored, the rows below it; the band starts
-/// 2 step rows early so that its first rows find their mirrored weights. Then every block of
-/// [`LANES`] output pixels sums its 25 taps in registers. Compiled for AVX2 as well, chosen
-/// at run time (the blocks then run 8 lanes wide instead of 4).
-#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
-fn filter_band(
-    src: &Planes,
-    out: &mut [&mut [f32]],
-    w: usize,
+/// Chain rows of a pass filtered together, at most this many (a task's halo is 2 of them).
+const STRETCH: usize = 32;
+
+/// The rows of an image of `height` rows as the chains of a pass of step `step`: chain
+/// `residue` holds rows residue, residue + step, ..., numbered 0, 1, ... along the chain, and
+/// is cut into stretches of [`STRETCH`] chain rows, one task each.
+struct Chains {
+    height: usize,
+    step: usize,
+    /// Task index of each chain's first stretch.
+    first: Vec<usize>,
+}
+
+impl Chains {
+    fn new(height: usize, step: usize) -> Self {
+        let mut first = Vec::with_capacity(step + 1);
+        let mut tasks = 0;
+        for residue in 0..step {
+            first.push(tasks);
+            tasks += Self::len(height, step, residue).div_ceil(STRETCH);
+        }
+        first.push(tasks);
+        Self {
+            height,
+            step,
+            first,
+        }
+    }
+
+    /// Rows in chain `residue`.
+    fn len(height: usize, step: usize, residue: usize) -> usize {
+        height.saturating_sub(residue).div_ceil(step)
+    }
+
+    /// Every task in order: its chain and its chain rows.
+    fn stretches(&self) -> impl Iterator<Item = (usize, std::ops::Range<usize>)> + '_ {
+        (0..self.step).flat_map(move |residue| {
+            let len = Self::len(self.height, self.step, residue);
+            (0..len.div_ceil(STRETCH))
+                .map(move |k| (residue, k * STRETCH..((k + 1) * STRETCH).min(len)))
+        })
+    }
+
+    /// The task of image row `y` and the row's place in the task.
+    fn task_of(&self, y: usize) -> (usize, usize) {
+        let (residue, m) = (y % self.step, y / self.step);
+        (self.first[residue] + m / STRETCH, m % STRETCH)
+    }
+}
+
+/// A stretch of one chain of a pass: chain rows `rows` of chain `residue` (image rows
+/// residue + m step).
+struct Chain {
+    residue: usize,
     rows: std::ops::Range<usize>,
     step: usize,
+}
+
+/// The chain rows `chain.rows` of one pass: `out[m]` holds the 7 output planes' row (S r, g,
+/// b, U r, g, b and guide, padded like the planes) of the stretch's m-th row. Row by row
+/// along the chain, the weights of the [`FORWARD`] taps are computed once into `ring` (which
+/// keeps the last 3 chain rows' weights) and serve both the row itself and, mirrored, the
+/// 2 chain rows below it; the stretch starts 2 chain rows early so that its first rows find
+/// their mirrored weights. Then every block of [`LANES`] output pixels sums its 25 taps in
+/// registers. Along a chain the taps of a row span 5 rows at any step, so the working set
+/// stays in the cache even for the widest steps. Compiled for AVX2 as well, chosen at run
+/// time (the blocks then run 8 lanes wide instead of 4).
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+fn filter_chain(
+    src: &Planes,
+    out: &mut [Vec<&mut [f32]>],
+    w: usize,
+    chain: Chain,
     inv: [f32; 3],
     ring: &mut Vec<f32>,
 ) {
     let Layout { stride, height, .. } = src.layout;
-    let slots = 2 * step + 1;
+    let Chain {
+        residue,
+        rows,
+        step,
+    } = chain;
+    const SLOTS: usize = 3;
     let per_row = FORWARD.len() * stride;
-    if ring.len() < slots * per_row {
+    if ring.len() != SLOTS * per_row {
         // Zeroed: the padding of the weight rows is never written and reads as 0 (every
         // row's interior is written before it is read).
-        *ring = vec![0.0; slots * per_row];
+        *ring = vec![0.0; SLOTS * per_row];
     }
-    for r in rows.start.saturating_sub(2 * step)..rows.end {
-        let slot = (r % slots) * per_row;
+    for m in rows.start.saturating_sub(2)..rows.end {
+        let r = residue + m * step;
+        let slot = (m % SLOTS) * per_row;
         weight_row(src, &mut ring[slot..slot + per_row], r, step, inv);
-        if r >= rows.start {
+        if m >= rows.start {
             let weights = |row: usize, o: usize| {
-                let at = (row % slots) * per_row + o * stride;
+                let at = ((row / step) % SLOTS) * per_row + o * stride;
                 &ring[at..at + stride]
             };
-            sum_row(src, out, w, r, r - rows.start, step, height, &weights);
+            sum_row(src, &mut out[m - rows.start], w, r, step, height, &weights);
         }
     }
 }
@@ -425,13 +502,18 @@ fn weight_row(
                 let e = dc * dc * inv_c
                     + (dnx * dnx + dny * dny + dnz * dnz) * inv_n
                     + (dpx * dpx + dpy * dpy + dpz * dpz) * inv_p;
-                dst[m] = hxy[o] * ch[m] * qh[m] * exp_neg(e);
+                // Weights below e^-40 (1e-18 of the centre's) are set to zero: their products
+                // with the pixel values would be subnormal floats, which cost the vector units
+                // a hundred times a normal multiply (the wide passes, whose colour weight
+                // grows fourfold per pass, made most of their weights so small).
+                let wt = hxy[o] * ch[m] * qh[m] * exp_neg(e);
+                dst[m] = if e < NEGLIGIBLE { wt } else { 0.0 };
             }
         }
     }
 }
 
-/// Output row `r` (row `out_row` of `out`): every pixel's 25 taps, the 12 [`FORWARD`] ones
+/// Output row `r` (`out`: its 7 planes' rows): every pixel's 25 taps, the 12 [`FORWARD`] ones
 /// with this row's weights and the 12 mirrored ones with the weights of the rows above
 /// (`weights(row, o)`, a padded row), summed in registers block by block; hit pixels get
 /// the normalised sums and their new guide.
@@ -442,7 +524,6 @@ fn sum_row<'a>(
     out: &mut [&mut [f32]],
     w: usize,
     r: usize,
-    out_row: usize,
     step: usize,
     height: usize,
     weights: &impl Fn(usize, usize) -> &'a [f32],
@@ -469,7 +550,7 @@ fn sum_row<'a>(
     let centre = values(r, 0);
     let h00 = H1[2] * H1[2];
     let hit = &src.row(HIT, r)[pad..pad + w];
-    let at = out_row * stride + pad;
+    let at = pad;
     for b in (0..wp).step_by(LANES) {
         // Accumulators: S r, g, b, U r, g, b, weight; the centre tap has weight h(0) > 0.
         let mut acc = [[0.0f32; LANES]; 7];
