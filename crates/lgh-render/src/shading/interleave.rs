@@ -5,8 +5,10 @@
 //! With n x n interleaving, pixel (x, y) belongs to sub-image (x mod n, y mod n), where it
 //! stands at (x div n, y div n); each sub-image is shaded with its own 1/n^2 of the lights,
 //! whose intensities are scaled by n^2. Lights are dealt in order (light k to sub-image
-//! k mod n^2). Afterwards the image is blurred over about the n x n neighbourhood with a
-//! discontinuity-aware filter, which recombines the sub-images' estimates.
+//! k mod n^2). Afterwards the images are blurred with a discontinuity-aware filter, which
+//! recombines the sub-images' estimates: the unshadowed sum over exactly the n x n
+//! neighbourhood ([`BlurParams::recombination`]), the shadow estimates over 17 x 17 pixels,
+//! gathering their samples.
 //!
 //! The shading passes do not copy the G-buffer into sub-images: a sub-image is a [`Lattice`]
 //! of the full-resolution buffers (every n-th pixel from an offset), and its screen tiles are
@@ -146,6 +148,22 @@ impl BlurParams {
             z_diff: 8.0,
             n_diff: 0.5,
             phases: 1,
+        }
+    }
+}
+
+impl BlurParams {
+    /// The narrowest blur that recombines the sub-images, for the unshadowed sum A: radius
+    /// n / 2 (at least 1), whose phase-balanced weights give each of the n x n sub-images
+    /// the same weight 1 / n^2 (at n = 4 the taps weigh (1/2, 1, 1, 1, 1/2) / 4 per axis).
+    /// Every light then counts once, evaluated at the pixel of its own sub-image within the
+    /// n x n window, and the image keeps its detail below the wide blur's 17 pixels
+    /// (docs/design.md, "Interleaved sampling").
+    #[must_use]
+    pub fn recombination(&self) -> Self {
+        Self {
+            radius: (self.phases / 2).max(1),
+            ..*self
         }
     }
 }
@@ -386,7 +404,8 @@ fn full_runs(src: &[f32], out: &mut [f32], at: usize, d: usize, weights: &[f32],
     }
 }
 
-/// Recombines interleaved sub-image estimates: [`discontinuities`] then [`blur`].
+/// Recombines interleaved sub-image estimates: [`discontinuities`] then [`blur`] (for the
+/// unshadowed sum, with [`BlurParams::recombination`] of the blur).
 #[must_use]
 pub fn recombine(img: Vec<Vec3>, g: &GBuffer, p: &BlurParams) -> Vec<Vec3> {
     let [out] = recombine_n([img], g, p);
@@ -525,6 +544,51 @@ mod tests {
         };
         let row = (5 * w) as usize;
         assert!(spread(&out[row..row + 10]) < 0.5 * spread(&img[row..row + 10]));
+    }
+
+    /// The recombination blur of the unshadowed sum (radius n / 2): on a 4 x 4 interleaved
+    /// image whose sub-images hold different constants, every pixel whose walk no edge or
+    /// border cuts holds exactly the mean of the 16 (to rounding, 1e-5), as a 17-tap blur
+    /// does; and a single bright pixel spreads over its 5 x 5 neighbourhood only, where the
+    /// wide blur spreads it over 17 x 17.
+    #[test]
+    fn the_recombination_counts_every_sub_image_once_within_n_pixels() {
+        let (w, h, split, n) = (40u32, 24u32, 17u32, 4u32);
+        let g = two_planes(w, h, split);
+        let wide = BlurParams {
+            phases: n,
+            ..BlurParams::defaults()
+        };
+        let narrow = wide.recombination();
+        assert_eq!(narrow.radius, 2);
+        let disc = discontinuities(&g, &wide);
+        let value = |s: usize| 1.0 + s as f32 * 0.37;
+        let img: Vec<Vec3> = (0..(w * h) as usize)
+            .map(|i| {
+                let (x, y) = (i as u32 % w, i as u32 / w);
+                Vec3::splat(value(sub_image_of(x, y, n)))
+            })
+            .collect();
+        let mean = (0..16).map(value).sum::<f32>() / 16.0;
+        let out = blur(&img, &g, &disc, &narrow);
+        for y in 2..h - 2 {
+            for x in (2..split - 2).chain(split + 2..w - 2) {
+                let v = out[(y * w + x) as usize].x;
+                assert!((v - mean).abs() < 1e-5 * mean, "({x}, {y}): {v} vs {mean}");
+            }
+        }
+        let mut spot = vec![Vec3::ZERO; (w * h) as usize];
+        let (cx, cy) = (28u32, 12u32);
+        spot[(cy * w + cx) as usize] = Vec3::ONE;
+        let reach = |p: &BlurParams| {
+            let out = blur(&spot, &g, &disc, p);
+            (0..w)
+                .filter(|&x| out[(cy * w + x) as usize].x > 0.0)
+                .map(|x| x.abs_diff(cx))
+                .max()
+        };
+        assert_eq!(reach(&narrow), Some(2));
+        assert_eq!(reach(&wide), Some(8));
     }
 
     /// A 4 x 4 interleaved image whose sub-images hold different constants, on two planes

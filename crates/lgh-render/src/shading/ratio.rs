@@ -116,7 +116,9 @@ pub fn shadowed_indirect(
     let n_px = g.len();
     if estimates.k == 0 {
         let a = match &settings.interleave_blur {
-            Some(p) => t.time("interleave_blur", || interleave::recombine(a, g, p)),
+            Some(p) => t.time("interleave_blur", || {
+                interleave::recombine(a, g, &p.recombination())
+            }),
             None => a,
         };
         let ratio = ShadowRatio::unshadowed(n_px);
@@ -134,10 +136,16 @@ pub fn shadowed_indirect(
         rays,
         ..
     } = estimates;
-    // A, S and U recombined together: one discontinuity map, one walk per pixel.
+    // One discontinuity map. A, which needs no gathering of samples, over exactly the n x n
+    // neighbourhood; S and U, whose ratio is a sample estimate, over the wide blur, which
+    // gathers the samples of about 17 x 17 pixels before the a-trous filter (docs/design.md,
+    // "Interleaved sampling").
     let [a, s_hat, u_hat] = match &settings.interleave_blur {
         Some(p) => t.time("interleave_blur", || {
-            interleave::recombine_n([a, s_hat, u_hat], g, p)
+            let disc = interleave::discontinuities(g, p);
+            let [a] = interleave::blur_n([a], g, &disc, &p.recombination());
+            let [s, u] = interleave::blur_n([s_hat, u_hat], g, &disc, p);
+            [a, s, u]
         }),
         None => [a, s_hat, u_hat],
     };

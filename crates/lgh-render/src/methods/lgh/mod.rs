@@ -13,7 +13,8 @@
 //!    With n x n interleaved sampling (4.3, `interleave` > 1), the lights of each level are
 //!    dealt to the n^2 sub-images (light k to k mod n^2), each pixel sums only its
 //!    sub-image's lights with n^2 times their intensity, and A, S and U are recombined by the
-//!    discontinuity-aware blur of [`crate::shading::interleave`] before the shadow filter.
+//!    discontinuity-aware blur of [`crate::shading::interleave`] before the shadow filter
+//!    (A over exactly the n x n window, S and U over 17 x 17 pixels).
 //! 3. **Shadow sample selection** (3.3, Appendix A): while shading, each pixel keeps k
 //!    single-slot reservoirs; every candidate light is offered with weight f_j = luminance
 //!    of its unshadowed contribution. With the unbiased estimate (the default,
