@@ -546,6 +546,36 @@ mod tests {
         assert!(spread(&out[row..row + 10]) < 0.5 * spread(&img[row..row + 10]));
     }
 
+    /// Width, height, the column of the depth edge and n of the interleaving tests.
+    const EDGE: (u32, u32, u32, u32) = (40, 24, 17, 4);
+
+    /// The [`two_planes`] G-buffer of [`EDGE`], the default blur for n x n interleaving and
+    /// its discontinuities.
+    fn edge_blur() -> (GBuffer, BlurParams, Vec<u8>) {
+        let (w, h, split, n) = EDGE;
+        let g = two_planes(w, h, split);
+        let p = BlurParams {
+            phases: n,
+            ..BlurParams::defaults()
+        };
+        let disc = discontinuities(&g, &p);
+        (g, p, disc)
+    }
+
+    /// A `w` x `h` image under n x n interleaving whose sub-image s holds the constant
+    /// 1 + 0.37 s, and the mean of the n^2 constants.
+    fn sub_image_constants(w: u32, h: u32, n: u32) -> (Vec<Vec3>, f32) {
+        let value = |s: usize| 1.0 + s as f32 * 0.37;
+        let img = (0..(w * h) as usize)
+            .map(|i| {
+                let (x, y) = (i as u32 % w, i as u32 / w);
+                Vec3::splat(value(sub_image_of(x, y, n)))
+            })
+            .collect();
+        let subs = (n * n) as usize;
+        (img, (0..subs).map(value).sum::<f32>() / subs as f32)
+    }
+
     /// The recombination blur of the unshadowed sum (radius n / 2): on a 4 x 4 interleaved
     /// image whose sub-images hold different constants, every pixel whose walk no edge or
     /// border cuts holds exactly the mean of the 16 (to rounding, 1e-5), as a 17-tap blur
@@ -553,23 +583,11 @@ mod tests {
     /// wide blur spreads it over 17 x 17.
     #[test]
     fn the_recombination_counts_every_sub_image_once_within_n_pixels() {
-        let (w, h, split, n) = (40u32, 24u32, 17u32, 4u32);
-        let g = two_planes(w, h, split);
-        let wide = BlurParams {
-            phases: n,
-            ..BlurParams::defaults()
-        };
+        let (w, h, split, n) = EDGE;
+        let (g, wide, disc) = edge_blur();
         let narrow = wide.recombination();
         assert_eq!(narrow.radius, 2);
-        let disc = discontinuities(&g, &wide);
-        let value = |s: usize| 1.0 + s as f32 * 0.37;
-        let img: Vec<Vec3> = (0..(w * h) as usize)
-            .map(|i| {
-                let (x, y) = (i as u32 % w, i as u32 / w);
-                Vec3::splat(value(sub_image_of(x, y, n)))
-            })
-            .collect();
-        let mean = (0..16).map(value).sum::<f32>() / 16.0;
+        let (img, mean) = sub_image_constants(w, h, n);
         let out = blur(&img, &g, &disc, &narrow);
         for y in 2..h - 2 {
             for x in (2..split - 2).chain(split + 2..w - 2) {
@@ -598,21 +616,9 @@ mod tests {
     /// by phase).
     #[test]
     fn every_sub_image_counts_along_an_edge() {
-        let (w, h, split, n) = (40u32, 24u32, 17u32, 4u32);
-        let g = two_planes(w, h, split);
-        let p = BlurParams {
-            phases: n,
-            ..BlurParams::defaults()
-        };
-        let disc = discontinuities(&g, &p);
-        let value = |s: usize| 1.0 + s as f32 * 0.37;
-        let img: Vec<Vec3> = (0..(w * h) as usize)
-            .map(|i| {
-                let (x, y) = (i as u32 % w, i as u32 / w);
-                Vec3::splat(value(sub_image_of(x, y, n)))
-            })
-            .collect();
-        let mean = (0..16).map(value).sum::<f32>() / 16.0;
+        let (w, h, split, n) = EDGE;
+        let (g, p, disc) = edge_blur();
+        let (img, mean) = sub_image_constants(w, h, n);
         let out = blur(&img, &g, &disc, &p);
         for y in 0..h {
             for x in [split - 1, split, 2, w - 3] {
