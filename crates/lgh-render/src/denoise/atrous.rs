@@ -272,8 +272,9 @@ pub fn filter_ratio_pair_in_place(
         // planes, one slice per plane and row, and recomputes the weights of the 2 chain rows
         // above its first (its halo).
         let chains = Chains::new(h, step);
-        let mut tasks: Vec<Vec<Vec<&mut [f32]>>> = chains
-            .stretches()
+        let stretches: Vec<_> = chains.stretches().collect();
+        let mut tasks: Vec<Vec<Vec<&mut [f32]>>> = stretches
+            .iter()
             .map(|(_, rows)| (0..rows.len()).map(|_| Vec::with_capacity(7)).collect())
             .collect();
         for plane_rows in next.chunks_mut(plane) {
@@ -289,7 +290,7 @@ pub fn filter_ratio_pair_in_place(
         let rings = &*rings;
         tasks
             .into_par_iter()
-            .zip(chains.stretches().collect::<Vec<_>>())
+            .zip(stretches)
             .for_each(|(mut out, (residue, rows))| {
                 // This thread's ring: never contended (the task spawns no work of its own).
                 let me = rayon::current_thread_index().unwrap_or(0) % rings.len();
