@@ -150,9 +150,7 @@ impl BlurParams {
             phases: 1,
         }
     }
-}
 
-impl BlurParams {
     /// The narrowest blur that recombines the sub-images, for the unshadowed sum A: radius
     /// n / 2 (at least 1), whose phase-balanced weights give each of the n x n sub-images
     /// the same weight 1 / n^2 (at n = 4 the taps weigh (1/2, 1, 1, 1, 1/2) / 4 per axis).
@@ -404,8 +402,8 @@ fn full_runs(src: &[f32], out: &mut [f32], at: usize, d: usize, weights: &[f32],
     }
 }
 
-/// Recombines interleaved sub-image estimates: [`discontinuities`] then [`blur`] (for the
-/// unshadowed sum, with [`BlurParams::recombination`] of the blur).
+/// Recombines interleaved sub-image estimates: [`discontinuities`] then [`blur`] (the
+/// unshadowed sum takes [`BlurParams::recombination`] of the blur as `p`).
 #[must_use]
 pub fn recombine(img: Vec<Vec3>, g: &GBuffer, p: &BlurParams) -> Vec<Vec3> {
     let [out] = recombine_n([img], g, p);
