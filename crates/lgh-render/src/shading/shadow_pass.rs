@@ -37,14 +37,30 @@ pub struct ShadowEstimates {
     pub rays: u64,
 }
 
+/// How a method finishes the samples its reservoirs selected, when their targets are drawn
+/// after selection (`lgh`'s representatives and unbiased estimate).
+pub trait Targets: Sync {
+    /// Sets the shadow-ray target of every held sample of a band, and the factors of its
+    /// gain that the ray needs (a zero gain: no ray).
+    fn resolve(&self, reservoirs: &mut ShadowReservoirs);
+
+    /// The gain of a sample of pixel `pixel` whose ray found its target visible. Factors
+    /// that only a visible sample needs are computed here, not for every sample (an
+    /// occluded sample adds nothing to S whatever its gain). By default the sample's gain.
+    fn visible_gain(&self, pixel: usize, sample: &ShadowSample) -> Vec3 {
+        let _ = pixel;
+        sample.gain
+    }
+}
+
 /// Wall times of [`ShadowPass::shade_in_bands`], summed over the bands, in milliseconds.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct BandTimes {
     /// The shading of the rows (reservoir selection included).
     pub shade_ms: f64,
-    /// The `resolve` step.
+    /// The targets' [`Targets::resolve`] step.
     pub resolve_ms: f64,
-    /// The shadow rays.
+    /// The shadow rays, with the visible samples' [`Targets::visible_gain`].
     pub rays_ms: f64,
 }
 
@@ -99,14 +115,10 @@ impl<'a> ShadowPass<'a> {
         shaded: &mut [P],
         init: impl Fn() -> St + Sync + Send,
         shade: impl Fn(&mut St, usize, &mut [P], &mut [Reservoir<ShadowSample>]) + Sync + Send,
-        resolve: Option<&(dyn Fn(&mut ShadowReservoirs) + Sync)>,
+        targets: Option<&dyn Targets>,
     ) -> (ShadowEstimates, BandTimes) {
         let Self {
-            world,
-            g,
-            k,
-            seed,
-            band_rows,
+            g, k, band_rows, ..
         } = *self;
         let (w, h) = (g.width as usize, g.height as usize);
         let n_px = g.len();
@@ -137,17 +149,16 @@ impl<'a> ShadowPass<'a> {
             if k == 0 {
                 continue;
             }
-            if let Some(resolve) = resolve {
+            if let Some(targets) = targets {
                 let start = std::time::Instant::now();
-                resolve(&mut reservoirs);
+                targets.resolve(&mut reservoirs);
                 times.resolve_ms += start.elapsed().as_secs_f64() * 1e3;
             }
             let start = std::time::Instant::now();
             est.rays += trace_band(
-                world,
-                g,
+                self,
                 &reservoirs,
-                seed,
+                targets,
                 px.start,
                 &mut est.s[px.clone()],
                 &mut est.u[px],
@@ -159,16 +170,17 @@ impl<'a> ShadowPass<'a> {
 }
 
 /// One shadow ray per held sample of the pixels `first..first + s.len()`: writes their S and
-/// U and returns the number of rays.
+/// U and returns the number of rays. A visible sample adds its U_k times its gain
+/// ([`Targets::visible_gain`] if the method has targets) to S.
 fn trace_band(
-    world: &World,
-    g: &GBuffer,
+    pass: &ShadowPass,
     reservoirs: &ShadowReservoirs,
-    seed: u64,
+    targets: Option<&dyn Targets>,
     first: usize,
     s_out: &mut [Vec3],
     u_out: &mut [Vec3],
 ) -> u64 {
+    let ShadowPass { world, g, seed, .. } = *pass;
     let k = reservoirs.k();
     s_out
         .par_iter_mut()
@@ -205,7 +217,7 @@ fn trace_band(
                 };
                 rays += 1;
                 if !world.occluded_between(xp, ng, q, sample.n.normalize_or_zero()) {
-                    s += u_k * sample.gain;
+                    s += u_k * targets.map_or(sample.gain, |t| t.visible_gain(i, &sample));
                 }
             }
             (*s_px, *u_px) = (s / k as f32, u / k as f32);
@@ -219,15 +231,16 @@ mod tests {
     use super::*;
     use crate::shading::reservoirs::{ReservoirLayout, offer};
 
-    /// Shading in bands of 3 rows gives what one band for the whole image gives: the same
-    /// shaded values, shadow estimates and ray count (pixels and random streams are indexed
-    /// by image position), with occluded samples among them.
-    #[test]
-    fn bands_do_not_change_the_result() {
+    /// The banded passes over the Cornell box at 40 x 30 with 3 samples a pixel, chosen
+    /// among 7 point lights spread through the box (some hidden behind the blocks), in bands
+    /// of `rows` rows: the shaded sums A and the shadow estimates.
+    fn seven_lights(
+        rows: Option<usize>,
+        targets: Option<&dyn Targets>,
+    ) -> (Vec<Vec3>, ShadowEstimates) {
         let world = World::new(lgh_scene::cornell::cornell_box());
         let (w, h) = (40u32, 30u32);
         let g = GBuffer::render(&world, &world.scene.camera().frame(w, h), w, h);
-        // Candidate lights spread through the box (some hidden behind the blocks).
         let lights: Vec<Vec3> = (0..7)
             .map(|j| {
                 let t = j as f32 / 7.0;
@@ -264,20 +277,25 @@ mod tests {
                     }
                 }
             };
-        let run = |rows: Option<usize>| {
-            let mut shaded = vec![Vec3::ZERO; g.len()];
-            let pass = ShadowPass {
-                world: &world,
-                g: &g,
-                k: 3,
-                seed: 5,
-                band_rows: rows,
-            };
-            let (est, _) = pass.shade_in_bands(&mut shaded, || (), shade, None);
-            (shaded, est)
+        let mut shaded = vec![Vec3::ZERO; g.len()];
+        let pass = ShadowPass {
+            world: &world,
+            g: &g,
+            k: 3,
+            seed: 5,
+            band_rows: rows,
         };
-        let (a1, one) = run(Some(h as usize));
-        let (a3, three) = run(Some(3));
+        let (est, _) = pass.shade_in_bands(&mut shaded, || (), shade, targets);
+        (shaded, est)
+    }
+
+    /// Shading in bands of 3 rows gives what one band for the whole image gives: the same
+    /// shaded values, shadow estimates and ray count (pixels and random streams are indexed
+    /// by image position), with occluded samples among them.
+    #[test]
+    fn bands_do_not_change_the_result() {
+        let (a1, one) = seven_lights(Some(30), None);
+        let (a3, three) = seven_lights(Some(3), None);
         assert_eq!(a1, a3);
         assert_eq!(
             (one.s, one.u, one.rays),
@@ -291,5 +309,39 @@ mod tests {
             .filter(|(s, u)| s.x < u.x)
             .count();
         assert!(occluded > 0, "some samples are shadowed");
+    }
+
+    /// Targets whose visible gain is 2 (the samples' own gain is 1) and that count the
+    /// samples they are asked about.
+    struct Doubling(std::sync::atomic::AtomicU64);
+
+    impl Targets for Doubling {
+        fn resolve(&self, _: &mut ShadowReservoirs) {}
+
+        fn visible_gain(&self, _: usize, _: &ShadowSample) -> Vec3 {
+            self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            Vec3::splat(2.0)
+        }
+    }
+
+    /// A method's visible gain scales exactly the visible samples' share of S (twice the
+    /// S of the samples' own gain, the same U), and is asked only for visible samples:
+    /// fewer times than rays are traced, since some samples are occluded.
+    #[test]
+    fn the_visible_gain_is_asked_for_visible_samples_only() {
+        let (_, plain) = seven_lights(None, None);
+        let doubling = Doubling(0.into());
+        let (_, doubled) = seven_lights(None, Some(&doubling));
+        assert_eq!(plain.u, doubled.u);
+        assert_eq!(plain.rays, doubled.rays);
+        for (s, s2) in plain.s.iter().zip(&doubled.s) {
+            assert_eq!(*s * 2.0, *s2);
+        }
+        let asked = doubling.0.into_inner();
+        assert!(
+            asked > 0 && asked < plain.rays,
+            "{asked} of {} rays",
+            plain.rays
+        );
     }
 }

@@ -18,6 +18,7 @@ use rayon::prelude::*;
 use crate::methods::lgh::light_batch::PackedLight;
 use crate::passes::gbuffer::GBuffer;
 use crate::shading::reservoirs::{ShadowReservoirs, ShadowSample};
+use crate::shading::shadow_pass::Targets;
 
 /// Random-stream tag of the shadow targets drawn after selection.
 const STREAM_TARGET: u64 = 0x162;
@@ -312,15 +313,18 @@ impl ShadeLights {
         }
     }
 
-    /// Finishes a sample of the unbiased estimate (docs/design.md, "Unbiased estimate"): from
-    /// its light j (a VPL, or grid light g of some level) draws an S_1 light below it in
-    /// proportion to its share ([`Descent`]; j itself for S_1 and VPLs), one of that light's
-    /// representatives i in proportion to its unshadowed contribution rho_i at the pixel,
-    /// sets the ray's target to VPL i, and the gain S_k / U_k per unit visibility,
+    /// Draws the target of a sample of the unbiased estimate (docs/design.md, "Unbiased
+    /// estimate"): from its light j (a VPL, or grid light g of some level) an S_1 light below
+    /// it in proportion to its share ([`Descent`]; j itself for S_1 and VPLs), and one of
+    /// that light's representatives i in proportion to its unshadowed contribution rho_i at
+    /// the pixel; the ray goes to VPL i. The sample's gain S_k / U_k per unit visibility is
     /// (sum rho / SLOTS) / (G_j Lambda_i) in the colour of VPL i: the ratio of the VPL's
     /// share-weighted contribution, as a sample of the VPLs that j stands for, to j's own
-    /// contribution A_j = B_l I_j G_j / pi. The gain is zero if no representative lights
-    /// the pixel (U still counts the light: it is part of A).
+    /// contribution A_j = B_l I_j G_j / pi. Here the gain gets the colour and sum rho /
+    /// SLOTS; G_j and Lambda_i, which only a visible sample needs, divide it in
+    /// [`ShadeLights::unbiased_gain`] once the ray has found the target visible. The gain is
+    /// zero (no ray) if no representative lights the pixel (U still counts the light: it
+    /// is part of A).
     fn resolve_unbiased(
         &self,
         sample: &mut ShadowSample,
@@ -330,7 +334,7 @@ impl ShadeLights {
         eps2: f32,
     ) {
         let j = sample.light as usize;
-        let h = &self.hierarchies[self.hierarchies.partition_point(|h| h.first <= j) - 1];
+        let h = self.hierarchy_of(j);
         // No ray unless a VPL below j lights the pixel (U still counts j).
         sample.gain = Vec3::ZERO;
         // The VPL the ray goes to, as (position, normal, index), and sum rho / SLOTS.
@@ -354,7 +358,22 @@ impl ShadeLights {
         if mean_rho <= 0.0 {
             return;
         }
-        let lambda = h.partition.blend_total(xp, q);
+        let colour = chroma(h.flux[vpl]) / chroma(self.intensity[j]);
+        (sample.q, sample.n) = (q, nq);
+        sample.gain = colour * mean_rho;
+    }
+
+    /// The hierarchy light `j` belongs to.
+    fn hierarchy_of(&self, j: usize) -> &Hierarchy {
+        &self.hierarchies[self.hierarchies.partition_point(|h| h.first <= j) - 1]
+    }
+
+    /// The gain of a visible sample of the unbiased estimate at the pixel at `xp` with
+    /// normal `nx`: the gain [`ShadeLights::resolve_unbiased`] set, divided by G_j Lambda_i
+    /// (zero where either is zero).
+    fn unbiased_gain(&self, sample: &ShadowSample, xp: Vec3, nx: Vec3, eps2: f32) -> Vec3 {
+        let j = sample.light as usize;
+        let lambda = self.hierarchy_of(j).partition.blend_total(xp, sample.q);
         let geo = light_irradiance(
             xp,
             nx,
@@ -366,15 +385,13 @@ impl ShadeLights {
         )
         .x * std::f32::consts::PI;
         if lambda <= 0.0 || geo <= 0.0 {
-            return;
+            return Vec3::ZERO;
         }
-        let colour = chroma(h.flux[vpl]) / chroma(self.intensity[j]);
-        (sample.q, sample.n) = (q, nq);
-        let gain = colour * (mean_rho / (geo * lambda));
+        let gain = sample.gain / (geo * lambda);
         // A light with a geometry term near the float minimum has a contribution near it
         // too, and is all but never selected; an overflowed gain would turn the filter's
         // sums into NaN.
-        sample.gain = Vec3::select(gain.is_finite_mask(), gain, Vec3::ZERO);
+        Vec3::select(gain.is_finite_mask(), gain, Vec3::ZERO)
     }
 
     /// The lights packed for the lighting loop, intensities times `scale`.
@@ -392,6 +409,30 @@ impl ShadeLights {
                 level: self.level[j],
             })
             .collect()
+    }
+}
+
+/// The shadow targets of `lgh`'s lights, drawn after selection ([`ShadeLights`]'s
+/// representatives or unbiased estimate) for the pixels of `g`.
+pub(super) struct LghTargets<'a> {
+    pub(super) lights: &'a ShadeLights,
+    pub(super) g: &'a GBuffer,
+    pub(super) seed: u64,
+    pub(super) eps2: f32,
+}
+
+impl Targets for LghTargets<'_> {
+    fn resolve(&self, reservoirs: &mut ShadowReservoirs) {
+        self.lights
+            .resolve_representatives(reservoirs, self.g, self.seed, self.eps2);
+    }
+
+    fn visible_gain(&self, pixel: usize, sample: &ShadowSample) -> Vec3 {
+        if self.lights.hierarchies.is_empty() {
+            return sample.gain;
+        }
+        let (xp, nx) = (self.g.position[pixel], self.g.normal[pixel]);
+        self.lights.unbiased_gain(sample, xp, nx, self.eps2)
     }
 }
 

@@ -25,7 +25,8 @@
 //!    ([`lgh_core::lighting_grid::descent`]), and one of that light's representative VPLs
 //!    is picked by its contribution; the sample's S counts that VPL's own contribution with
 //!    its blending share normalised to one ([`lgh_core::lighting_grid::partition`];
-//!    docs/design.md, "Unbiased estimate"). Paper estimate: the target is one of the
+//!    docs/design.md, "Unbiased estimate"), a normalisation computed only once the ray has
+//!    found the VPL visible ([`crate::shading::shadow_pass::Targets::visible_gain`]). Paper estimate: the target is one of the
 //!    per-frame representatives of the light ([`ShadowTarget::Representative`], an
 //!    extension that removes the darkening of centroids inside objects) or the paper's
 //!    centroid jittered by its deviation (q = p_j + 0.5 t * deviation, t raised-cosine per
@@ -61,8 +62,8 @@ use crate::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
 use crate::passes::par_filled;
 use crate::settings::RenderError;
 use crate::shading::ratio::{RATIO_CORRECTION, RATIO_VISIBILITY, RatioFilter, shadowed_indirect};
-use crate::shading::reservoirs::{ReservoirLayout, ShadowReservoirs};
-use crate::shading::shadow_pass::ShadowPass;
+use crate::shading::reservoirs::ReservoirLayout;
+use crate::shading::shadow_pass::{ShadowPass, Targets};
 use crate::shading::tiles::InterleavedBins;
 
 pub mod light_batch;
@@ -71,7 +72,7 @@ pub mod settings;
 mod shade;
 
 use light_batch::LightBatch;
-use lights::{ShadeLights, split_by_normal};
+use lights::{LghTargets, ShadeLights, split_by_normal};
 pub use settings::{
     DEFAULT_INTERLEAVE, Estimator, JitterAt, LghSettings, ShadowTarget, auto_tile,
 };
@@ -267,13 +268,18 @@ pub fn render_lgh(
         seed,
         phases: n as usize,
     };
-    let resolve = |r: &mut ShadowReservoirs| lights.resolve_representatives(r, g, seed, eps2);
+    let targets = LghTargets {
+        lights: &lights,
+        g,
+        seed,
+        eps2,
+    };
     let (estimates, times) = ShadowPass::new(world, g, k, seed).shade_in_bands(
         &mut shaded,
         || vec![LightBatch::default(); ctx.phases],
         |batches, y, row, row_res| shade_row(&ctx, y, row, row_res, batches),
         (representative && settings.jitter == JitterAt::Ray)
-            .then_some(&resolve as &(dyn Fn(&mut ShadowReservoirs) + Sync)),
+            .then_some(&targets as &dyn Targets),
     );
     let overdraw: Vec<u32> = shaded.par_iter().map(|p| p.1).collect();
     stats.avg_overdraw = g.mean_over_hits(&overdraw);
