@@ -29,7 +29,9 @@ pub struct ShadowSample {
     pub light: u32,
     /// Factor of the shadowed estimate per channel: S_k = V gain U_k (1 when S and U
     /// estimate the same sum; `lgh`'s unbiased estimate sets it, docs/design.md, "Unbiased
-    /// estimate"). Zero: no ray, S_k = 0, U_k still counts.
+    /// estimate", and finishes it for a visible sample,
+    /// [`crate::shading::shadow_pass::Targets::visible_gain`]). Zero: no ray, S_k = 0,
+    /// U_k still counts.
     pub gain: Vec3,
 }
 
