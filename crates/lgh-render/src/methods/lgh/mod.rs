@@ -26,11 +26,12 @@
 //!    is picked by its contribution; the sample's S counts that VPL's own contribution with
 //!    its blending share normalised to one ([`lgh_core::lighting_grid::partition`];
 //!    docs/design.md, "Unbiased estimate"), a normalisation computed only once the ray has
-//!    found the VPL visible ([`crate::shading::shadow_pass::Targets::visible_gain`]). Paper estimate: the target is one of the
-//!    per-frame representatives of the light ([`ShadowTarget::Representative`], an
-//!    extension that removes the darkening of centroids inside objects) or the paper's
-//!    centroid jittered by its deviation (q = p_j + 0.5 t * deviation, t raised-cosine per
-//!    axis; docs/design.md, "Shadow targets").
+//!    found the VPL visible ([`crate::shading::shadow_pass::Targets::visible_gain`]).
+//!    Paper estimate: the target is one of the per-frame representatives of the light
+//!    ([`ShadowTarget::Representative`], an extension that removes the darkening of
+//!    centroids inside objects) or the paper's centroid jittered by its deviation
+//!    (q = p_j + 0.5 t * deviation, t raised-cosine per axis; docs/design.md, "Shadow
+//!    targets").
 //! 5. **Shadow rays and the ratio estimator** (Heitz et al. 2018): one ray per reservoir;
 //!    U_k = f^ f_j / lum(f_j) (an unbiased estimate of the candidates' sum A), S_k =
 //!    V gain U_k (gain 1 for the paper's estimate, which then estimates the grid lights'
