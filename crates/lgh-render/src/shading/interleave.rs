@@ -406,19 +406,8 @@ fn full_runs(src: &[f32], out: &mut [f32], at: usize, d: usize, weights: &[f32],
 /// unshadowed sum takes [`BlurParams::recombination`] of the blur as `p`).
 #[must_use]
 pub fn recombine(img: Vec<Vec3>, g: &GBuffer, p: &BlurParams) -> Vec<Vec3> {
-    let [out] = recombine_n([img], g, p);
+    let [out] = blur_n([img], g, &discontinuities(g, p), p);
     out
-}
-
-/// [`recombine`] of `N` images of the same G-buffer (the unshadowed sum and the shadow
-/// estimates), in place, with one discontinuity map.
-#[must_use]
-pub fn recombine_n<const N: usize>(
-    imgs: [Vec<Vec3>; N],
-    g: &GBuffer,
-    p: &BlurParams,
-) -> [Vec<Vec3>; N] {
-    blur_n(imgs, g, &discontinuities(g, p), p)
 }
 
 /// Steps of the blur's walk from every pixel along x (`vertical` false) or y, at most `r`:
