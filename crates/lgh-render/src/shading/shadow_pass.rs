@@ -88,6 +88,9 @@ pub struct ShadowPass<'a> {
     pub seed: u64,
     /// Image rows per band; `None`: reservoirs of about [`BAND_BYTES`].
     pub band_rows: Option<usize>,
+    /// Image rows shaded together by one call of the shading function (1: row by row);
+    /// bands are rounded up to whole groups.
+    pub group_rows: usize,
 }
 
 impl<'a> ShadowPass<'a> {
@@ -100,6 +103,17 @@ impl<'a> ShadowPass<'a> {
             k,
             seed,
             band_rows: None,
+            group_rows: 1,
+        }
+    }
+
+    /// The same passes, shading `rows` image rows per call (at least 1): a method whose
+    /// lights are listed per screen tile shades a whole row of tiles at once.
+    #[must_use]
+    pub fn with_group_rows(self, rows: usize) -> Self {
+        Self {
+            group_rows: rows.max(1),
+            ..self
         }
     }
 
@@ -118,7 +132,11 @@ impl<'a> ShadowPass<'a> {
         targets: Option<&dyn Targets>,
     ) -> (ShadowEstimates, BandTimes) {
         let Self {
-            g, k, band_rows, ..
+            g,
+            k,
+            band_rows,
+            group_rows,
+            ..
         } = *self;
         let (w, h) = (g.width as usize, g.height as usize);
         let n_px = g.len();
@@ -129,7 +147,11 @@ impl<'a> ShadowPass<'a> {
             rays: 0,
         };
         let mut times = BandTimes::default();
-        let rows = band_rows.unwrap_or_else(|| default_band_rows(w, k.max(1)));
+        let group = group_rows.max(1);
+        let rows = band_rows
+            .unwrap_or_else(|| default_band_rows(w, k.max(1)))
+            .div_ceil(group)
+            * group;
         let mut reservoirs = ShadowReservoirs::new(w, 0..0, k);
         for y0 in (0..h).step_by(rows) {
             let band = y0..(y0 + rows).min(h);
@@ -139,11 +161,11 @@ impl<'a> ShadowPass<'a> {
             // not in a pass of their own over the whole band (250 MB at k = 4, 1280x720).
             reservoirs.place(band.clone());
             shaded[px.clone()]
-                .par_chunks_mut(w)
-                .zip(reservoirs.rows_mut())
-                .for_each_init(&init, |state, (row, (y, row_res))| {
-                    row_res.fill(Reservoir::new());
-                    shade(state, y, row, row_res);
+                .par_chunks_mut(w * group)
+                .zip(reservoirs.groups_mut(group))
+                .for_each_init(&init, |state, (rows, (y, res))| {
+                    res.fill(Reservoir::new());
+                    shade(state, y, rows, res);
                 });
             times.shade_ms += start.elapsed().as_secs_f64() * 1e3;
             if k == 0 {
@@ -233,9 +255,11 @@ mod tests {
 
     /// The banded passes over the Cornell box at 40 x 30 with 3 samples a pixel, chosen
     /// among 7 point lights spread through the box (some hidden behind the blocks), in bands
-    /// of `rows` rows: the shaded sums A and the shadow estimates.
+    /// of `rows` rows shaded `group` rows per call: the shaded sums A and the shadow
+    /// estimates.
     fn seven_lights(
         rows: Option<usize>,
+        group: usize,
         targets: Option<&dyn Targets>,
     ) -> (Vec<Vec3>, ShadowEstimates) {
         let world = World::new(lgh_scene::cornell::cornell_box());
@@ -254,15 +278,15 @@ mod tests {
             })
             .collect();
         let shade =
-            |_: &mut (), y: usize, row: &mut [Vec3], res: &mut [Reservoir<ShadowSample>]| {
+            |_: &mut (), y0: usize, rows: &mut [Vec3], res: &mut [Reservoir<ShadowSample>]| {
                 let layout = ReservoirLayout::new(3);
-                for (x, a) in row.iter_mut().enumerate() {
-                    let i = y * w as usize + x;
+                for (at, a) in rows.iter_mut().enumerate() {
+                    let i = y0 * w as usize + at;
                     if !g.is_hit(i) {
                         continue;
                     }
                     let mut rng = Rng::new(&[9, i as u64]);
-                    let slots = layout.pixel_mut(res, x);
+                    let slots = layout.pixel_mut(res, at);
                     for (j, &q) in lights.iter().enumerate() {
                         let f = Vec3::splat(1.0 + j as f32)
                             / (1.0 + (q - g.position[i]).length_squared());
@@ -284,18 +308,29 @@ mod tests {
             k: 3,
             seed: 5,
             band_rows: rows,
+            group_rows: group,
         };
         let (est, _) = pass.shade_in_bands(&mut shaded, || (), shade, targets);
         (shaded, est)
     }
 
-    /// Shading in bands of 3 rows gives what one band for the whole image gives: the same
-    /// shaded values, shadow estimates and ray count (pixels and random streams are indexed
-    /// by image position), with occluded samples among them.
+    /// Shading in bands of 3 rows, row by row or in groups of 2 or 7 rows (bands rounded up
+    /// to whole groups, the last group short), gives what one band for the whole image
+    /// gives: the same shaded values, shadow estimates and ray count (pixels and random
+    /// streams are indexed by image position), with occluded samples among them.
     #[test]
-    fn bands_do_not_change_the_result() {
-        let (a1, one) = seven_lights(Some(30), None);
-        let (a3, three) = seven_lights(Some(3), None);
+    fn bands_and_groups_do_not_change_the_result() {
+        let (a1, one) = seven_lights(Some(30), 1, None);
+        for group in [2, 7] {
+            let (a, grouped) = seven_lights(Some(3), group, None);
+            assert_eq!(a1, a, "groups of {group}");
+            assert_eq!(
+                (&one.s, &one.u, one.rays),
+                (&grouped.s, &grouped.u, grouped.rays),
+                "groups of {group}"
+            );
+        }
+        let (a3, three) = seven_lights(Some(3), 1, None);
         assert_eq!(a1, a3);
         assert_eq!(
             (one.s, one.u, one.rays),
@@ -329,9 +364,9 @@ mod tests {
     /// fewer times than rays are traced, since some samples are occluded.
     #[test]
     fn the_visible_gain_is_asked_for_visible_samples_only() {
-        let (_, plain) = seven_lights(None, None);
+        let (_, plain) = seven_lights(None, 1, None);
         let doubling = Doubling(0.into());
-        let (_, doubled) = seven_lights(None, Some(&doubling));
+        let (_, doubled) = seven_lights(None, 1, Some(&doubling));
         assert_eq!(plain.u, doubled.u);
         assert_eq!(plain.rays, doubled.rays);
         for (s, s2) in plain.s.iter().zip(&doubled.s) {

@@ -432,18 +432,10 @@ impl InterleavedBins {
         (s, self.bins[s].tile_index(x, y))
     }
 
-    /// For pixels (0, y), (1, y), ... (`width` of them): the sub-image column phase x mod n
-    /// and [`InterleavedBins::tile_key`], found by counting instead of four integer
-    /// divisions per pixel (the lighting loop asks for every pixel).
-    pub fn row_keys(&self, y: u32, width: u32) -> impl Iterator<Item = (usize, (usize, usize))> {
-        let n = self.n.max(1);
-        // Every sub-image's bins have the same full-resolution tile and tiles per row.
-        let (tile, tiles_x) = self
-            .bins
-            .first()
-            .map_or((1, 0), |b| (b.tile.max(1), b.tiles_x));
-        let row_base = ((y / tile) * tiles_x) as usize;
-        row_phases(y, width, n, tile).map(move |(phase, s, tx)| (phase, (s, row_base + tx)))
+    /// The tile edge in full-resolution pixels (n times the sub-image tile).
+    #[must_use]
+    pub fn tile_pixels(&self) -> u32 {
+        self.bins.first().map_or(1, |b| b.tile.max(1))
     }
 
     /// The global indices of the lights listed for full-resolution pixel (x, y) in its
@@ -486,27 +478,6 @@ mod tests {
             fov_y_degrees: 40.0,
         };
         (g, camera.frame(w, h))
-    }
-
-    /// The counted row keys are the tile keys, for every interleaving and a width that is
-    /// not a multiple of the tile.
-    #[test]
-    fn row_keys_are_the_tile_keys() {
-        let (w, h) = (37u32, 11u32);
-        let (g, frame) = flat_view(w, h);
-        for (n, tile) in [(1u32, 16u32), (2, 3), (4, 4), (4, 1)] {
-            let sub: Vec<u16> = (0..20).map(|i| (i % (n * n)) as u16).collect();
-            let centres = vec![Vec3::ZERO; sub.len()];
-            let radii = vec![1.0; sub.len()];
-            let bins = InterleavedBins::build(&g, &frame, tile, n, &centres, &radii, &sub);
-            for y in 0..h {
-                let keys: Vec<_> = bins.row_keys(y, w).collect();
-                let expected: Vec<_> = (0..w)
-                    .map(|x| ((x % n) as usize, bins.tile_key(x, y)))
-                    .collect();
-                assert_eq!(keys, expected, "n {n}, tile {tile}, row {y}");
-            }
-        }
     }
 
     /// Every light belongs to exactly one sub-image: over the n^2 pixels of one interleaving

@@ -17,6 +17,7 @@
 
 use glam::Vec3;
 use lgh_core::blending::LevelRole;
+use lgh_core::color::luminance;
 
 /// Lights evaluated together.
 pub const LANES: usize = 8;
@@ -56,6 +57,8 @@ pub struct LightBatch {
     pos: [Vec<f32>; 3],
     normal: [Vec<f32>; 3],
     intensity: [Vec<f32>; 3],
+    /// Luminance of the intensity.
+    lum: Vec<f32>,
     iso: Vec<f32>,
     inv_radius: Vec<f32>,
     reach2: Vec<f32>,
@@ -73,6 +76,9 @@ pub struct LaneResult {
     pub reached: [bool; LANES],
     /// B_l(d) times the irradiance, RGB.
     pub value: [[f32; LANES]; 3],
+    /// The luminance of `value` (B_l(d) times the irradiance of the intensity's luminance):
+    /// the light's selection weight.
+    pub lum: [f32; LANES],
 }
 
 impl LightBatch {
@@ -112,6 +118,7 @@ impl LightBatch {
             pos,
             normal,
             intensity,
+            lum,
             iso,
             inv_radius,
             reach2,
@@ -128,7 +135,13 @@ impl LightBatch {
             .iter_mut()
             .chain(normal.iter_mut())
             .chain(intensity.iter_mut())
-            .chain([&mut *iso, &mut *inv_radius, &mut *rise_off, &mut *fall_off])
+            .chain([
+                &mut *lum,
+                &mut *iso,
+                &mut *inv_radius,
+                &mut *rise_off,
+                &mut *fall_off,
+            ])
         {
             v.clear();
             v.resize(padded, 0.0);
@@ -140,13 +153,15 @@ impl LightBatch {
         let [px, py, pz] = pos.each_mut().map(|v| &mut v[..]);
         let [mx, my, mz] = normal.each_mut().map(|v| &mut v[..]);
         let [ir, ig, ib] = intensity.each_mut().map(|v| &mut v[..]);
-        let (iso, inv_radius, reach2) = (&mut iso[..], &mut inv_radius[..], &mut reach2[..]);
+        let (lum, iso) = (&mut lum[..], &mut iso[..]);
+        let (inv_radius, reach2) = (&mut inv_radius[..], &mut reach2[..]);
         let (rise_off, fall_off, level) = (&mut rise_off[..], &mut fall_off[..], &mut level[..]);
         for (e, &j) in index.iter().enumerate() {
             let pl = &packed[j as usize];
             (px[e], py[e], pz[e]) = pl.position.into();
             (mx[e], my[e], mz[e]) = pl.normal.into();
             (ir[e], ig[e], ib[e]) = pl.intensity.into();
+            lum[e] = luminance(pl.intensity);
             iso[e] = pl.iso;
             inv_radius[e] = pl.radius.recip();
             reach2[e] = pl.reach2;
@@ -163,7 +178,7 @@ impl LightBatch {
     /// Evaluates lights `LANES * chunk ..` for the pixel at `x` with normal `n`: the reach
     /// test, B_l(d), and the irradiance f_j = I_j cos_x cos_v / (pi (d^2 + eps^2)) with
     /// cos_v = max(0, -m . w) + iso (as [`lgh_core::vpl::light_irradiance_along`]).
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn eval(&self, chunk: usize, x: Vec3, n: Vec3, eps2: f32) -> LaneResult {
         let o = chunk * LANES;
@@ -197,6 +212,10 @@ impl LightBatch {
             let v = b * cos_x * cos_v / (std::f32::consts::PI * (d2 + eps2));
             out.reached[l] = reached;
             g[l] = if ok { v } else { 0.0 };
+        }
+        let y = lane(&self.lum);
+        for l in 0..LANES {
+            out.lum[l] = g[l] * y[l];
         }
         for (a, ints) in self.intensity.iter().enumerate() {
             let i = lane(ints);
@@ -279,6 +298,12 @@ mod tests {
                         (got - expected).abs().max_element()
                             <= 1e-5 * expected.max_element().max(1e-3),
                         "light {j}: {got} vs {expected}"
+                    );
+                    let y = luminance(expected);
+                    assert!(
+                        (r.lum[l] - y).abs() <= 1e-5 * y.max(1e-3),
+                        "light {j}: luminance {} vs {y}",
+                        r.lum[l]
                     );
                 }
             }

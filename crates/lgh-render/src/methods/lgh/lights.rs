@@ -263,7 +263,7 @@ impl ShadeLights {
     ) {
         let w = g.width as usize;
         let layout = reservoirs.layout();
-        reservoirs.rows_mut().for_each(|(y, row)| {
+        reservoirs.groups_mut(1).for_each(|(y, row)| {
             for x in 0..w {
                 let i = y * w + x;
                 if g.is_hit(i) {

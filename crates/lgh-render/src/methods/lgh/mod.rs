@@ -72,12 +72,11 @@ mod lights;
 pub mod settings;
 mod shade;
 
-use light_batch::LightBatch;
 use lights::{LghTargets, ShadeLights, split_by_normal};
 pub use settings::{
     DEFAULT_INTERLEAVE, Estimator, JitterAt, LghSettings, ShadowTarget, auto_tile,
 };
-use shade::{RowContext, shade_row};
+use shade::{RowContext, RowScratch, shade_rows};
 
 /// Random-stream tag of the grid offset of `--grid-jitter`.
 const STREAM_GRID_SHIFT: u64 = 0x6a1d;
@@ -275,10 +274,12 @@ pub fn render_lgh(
         seed,
         eps2,
     };
-    let (estimates, times) = ShadowPass::new(world, g, k, seed).shade_in_bands(
+    // One row of tiles per call, so that a tile's light batch serves all its rows.
+    let pass = ShadowPass::new(world, g, k, seed).with_group_rows(bins.tile_pixels() as usize);
+    let (estimates, times) = pass.shade_in_bands(
         &mut shaded,
-        || vec![LightBatch::default(); ctx.phases],
-        |batches, y, row, row_res| shade_row(&ctx, y, row, row_res, batches),
+        RowScratch::default,
+        |scratch, y0, rows, res| shade_rows(&ctx, y0, rows, res, scratch),
         (representative && settings.jitter == JitterAt::Ray)
             .then_some(&targets as &dyn Targets),
     );

@@ -51,6 +51,14 @@ pub struct LghSettings {
     /// default, faster).
     #[cfg_attr(feature = "clap", arg(long = "jitter-at", value_enum, default_value_t = LghSettings::default().jitter))]
     pub jitter: JitterAt,
+    /// lgh: how the k shadow samples of a pixel are drawn among its candidates: `stratified`
+    /// (the default; an extension: one pass over the pixel's light chunks, the k samples
+    /// stratified over the cumulative weight) or `streaming` (the paper's Appendix A: k
+    /// independent reservoirs updated light by light). Each sample has the same distribution
+    /// either way (docs/design.md, "Stratified selection"). `--jitter-at candidate` always
+    /// streams.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = LghSettings::default().selection))]
+    pub selection: Selection,
     /// lgh: where the shadow ray of a selected grid light goes: one of the VPLs it stands
     /// for, drawn in proportion to its share (an extension, the default), or its jittered
     /// centroid (the paper; centroids inside objects or walls darken the image).
@@ -118,6 +126,19 @@ pub enum JitterAt {
     Ray,
 }
 
+/// How the k shadow samples of a pixel are drawn (docs/design.md, "Stratified selection").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum Selection {
+    /// k independent single-slot reservoirs, each offered every candidate (LGH 2019
+    /// Appendix A).
+    Streaming,
+    /// The cumulative weight inverted at k stratified points
+    /// ([`crate::shading::reservoirs::stratified_picks`]); the default.
+    Stratified,
+}
+
 impl Default for LghSettings {
     fn default() -> Self {
         Self {
@@ -131,6 +152,7 @@ impl Default for LghSettings {
             grid_jitter: false,
             emission: GridEmission::EnergyConserving,
             jitter: JitterAt::Ray,
+            selection: Selection::Stratified,
             shadow_target: ShadowTarget::Representative,
             estimator: Estimator::Unbiased,
             only_level: None,
