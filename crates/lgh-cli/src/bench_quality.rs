@@ -11,7 +11,7 @@ use lgh_render::frame::render_frame_with;
 use lgh_render::image::ImageFormat;
 use lgh_render::image::metrics::{diff, display_bytes, flip_mean};
 use lgh_render::methods::brute::BRUTE;
-use lgh_render::methods::lgh::{LGH, LghSettings};
+use lgh_render::methods::lgh::{self, LGH, LghSettings};
 use lgh_render::methods::slc::{SLC, SLC_CLAMPED};
 use lgh_render::settings::{DEMO_FILTER_COLOR, ShadowSettings};
 use lgh_render::{Component, Frame, FrameMemory, Image, RenderSettings, Silent, World};
@@ -104,12 +104,12 @@ fn measure(f: &Image, reference: &Image, exposure: f32) -> Result<(f64, f64, f64
 fn series(base: &RenderSettings) -> Vec<(&'static str, String, RenderSettings)> {
     let mut out = Vec::new();
     let shadows = |k: u32| ShadowSettings {
-        samples: k,
+        samples: Some(k),
         ..ShadowSettings::default()
     };
-    for k in [1, 4, 16] {
+    for k in [1, lgh::DEFAULT_SHADOW_SAMPLES, 16] {
         // The defaults: the unbiased estimate, alpha 3, six normal bins, the VPLs near the
-        // pixel, 4 x 4.
+        // pixel, 2 x 2.
         let lgh = RenderSettings {
             method: LGH,
             shadows: shadows(k),
@@ -204,7 +204,7 @@ fn accumulation(
         let lgh = RenderSettings {
             method: LGH,
             shadows: ShadowSettings {
-                samples: ACCUMULATE_SHADOW_SAMPLES,
+                samples: Some(ACCUMULATE_SHADOW_SAMPLES),
                 ..base.shadows
             },
             ..base.clone()
@@ -362,7 +362,8 @@ fn slc_in_time<'a>(points: &'a [Point], scene: &str, ms: f64) -> Option<&'a Poin
         .or_else(|| slc().min_by(|a, b| a.ms.total_cmp(&b.ms)))
 }
 
-/// The default settings' points of every scene (lgh with k = 4, slc with its default bound).
+/// The default settings' points of every scene (lgh with its default k, slc with its default
+/// bound).
 fn summary(points: &[Point]) -> Vec<SummaryRow<'_>> {
     let find = |scene: &str, series: &str, setting: &str| {
         points
@@ -375,7 +376,11 @@ fn summary(points: &[Point]) -> Vec<SummaryRow<'_>> {
             continue;
         }
         if let (Some(lgh), Some(slc)) = (
-            find(&p.scene, "lgh", "k=4"),
+            find(
+                &p.scene,
+                "lgh",
+                &format!("k={}", lgh::DEFAULT_SHADOW_SAMPLES),
+            ),
             find(&p.scene, "slc", "eb=0.0005"),
         ) && let Some(slc_in_time) = slc_in_time(points, &p.scene, lgh.ms)
         {

@@ -86,7 +86,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
                 height: h,
                 lgh: args.lgh.clone(),
                 shadows: ShadowSettings {
-                    samples: k,
+                    samples: Some(k),
                     ..ShadowSettings::default()
                 },
                 tiling: Tiling {

@@ -95,7 +95,7 @@ pub fn run(args: &SlcBenchArgs) -> Result<()> {
         area_samples: 0,
         component: Component::Indirect,
         shadows: ShadowSettings {
-            samples: 0,
+            samples: Some(0),
             ..ShadowSettings::default()
         },
         ..RenderSettings::default()

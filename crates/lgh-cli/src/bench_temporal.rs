@@ -84,7 +84,7 @@ pub fn run(args: &TemporalBenchArgs) -> Result<()> {
     let (without, ms) = run_one(&world, &base, args.frames, None)?;
     // The flicker of the unshadowed lighting A alone: the part no shadow filter can remove.
     let mut no_shadows = base.clone();
-    no_shadows.shadows.samples = 0;
+    no_shadows.shadows.samples = Some(0);
     let (unshadowed, _) = run_one(&world, &no_shadows, args.frames, None)?;
     let (with_ratio, ms_ratio) = run_one(
         &world,

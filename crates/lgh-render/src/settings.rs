@@ -49,8 +49,9 @@ pub enum ShadowFilter {
 #[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct ShadowSettings {
     /// lgh, slc: shadow samples (shadow rays) per pixel, 0 = no shadows (at most 16).
-    #[cfg_attr(feature = "clap", arg(long = "shadow-samples", default_value_t = ShadowSettings::default().samples))]
-    pub samples: u32,
+    /// Default: the method's own (lgh 5, slc 4; docs/design.md, "Defaults").
+    #[cfg_attr(feature = "clap", arg(long = "shadow-samples"))]
+    pub samples: Option<u32>,
     /// lgh, slc: filter applied to the shadow estimates.
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = ShadowSettings::default().filter))]
     pub filter: ShadowFilter,
@@ -71,7 +72,7 @@ pub const DEMO_FILTER_COLOR: f32 = 0.5;
 impl Default for ShadowSettings {
     fn default() -> Self {
         Self {
-            samples: 4,
+            samples: None,
             filter: ShadowFilter::Atrous,
             filter_passes: 5,
             filter_color: 0.1,
@@ -80,12 +81,12 @@ impl Default for ShadowSettings {
 }
 
 impl ShadowSettings {
-    /// Shadow samples k per pixel for a method that is `shadowed` (0 if not), at most
-    /// [`MAX_SHADOW_SAMPLES`].
+    /// Shadow samples k per pixel for a method that is `shadowed` (0 if not) and takes
+    /// `default` unless `samples` is given, at most [`MAX_SHADOW_SAMPLES`].
     #[must_use]
-    pub fn k(&self, shadowed: bool) -> usize {
+    pub fn k(&self, shadowed: bool, default: u32) -> usize {
         if shadowed {
-            self.samples.min(MAX_SHADOW_SAMPLES) as usize
+            self.samples.unwrap_or(default).min(MAX_SHADOW_SAMPLES) as usize
         } else {
             0
         }
@@ -108,7 +109,8 @@ impl ShadowSettings {
 pub struct Tiling {
     /// lgh, slc: n x n interleaved sampling: each of the n^2 sub-images shades 1/n^2 of the
     /// lights (of each level, for lgh), then a discontinuity-aware blur recombines them.
-    /// Default: 4 for lgh (the paper: none), 8 for slc (the paper's).
+    /// Default: 2 for lgh renders, 4 in the viewer (the paper: none), 8 for slc (the
+    /// paper's).
     #[cfg_attr(feature = "clap", arg(long))]
     pub interleave: Option<u32>,
     /// lgh, slc: screen tile edge in sub-image pixels for light binning. Default: 16
@@ -281,6 +283,15 @@ pub struct ErrorBound {
 }
 
 impl RenderSettings {
+    /// The shadow samples per pixel of the chosen method: `--shadow-samples`, or the
+    /// method's default ([`IndirectMethod::default_shadow_samples`]).
+    #[must_use]
+    pub fn shadow_samples(&self) -> u32 {
+        self.shadows
+            .samples
+            .unwrap_or_else(|| self.method.get().default_shadow_samples())
+    }
+
     /// Settings that are valid but probably not what was meant, one line each (the image
     /// of a VPL method with no VPLs has no indirect light).
     #[must_use]
@@ -394,12 +405,9 @@ impl RenderSettings {
         positive("alpha", self.lgh.alpha)?;
         positive("filter-color", self.shadows.filter_color)?;
         positive("clamp-fraction", self.clamp_fraction)?;
-        in_range(
-            "shadow-samples",
-            self.shadows.samples,
-            0,
-            MAX_SHADOW_SAMPLES,
-        )?;
+        if let Some(k) = self.shadows.samples {
+            in_range("shadow-samples", k, 0, MAX_SHADOW_SAMPLES)?;
+        }
         in_range("spp", self.pt.spp, 1, 1 << 20)?;
         if let Some(n) = self.tiling.interleave {
             in_range("interleave", n, 1, 16)?;
@@ -450,7 +458,7 @@ mod tests {
         let e = s.validate().unwrap_err();
         assert_eq!(e.to_string(), "--alpha -1: must be a positive number");
         let mut s = RenderSettings::default();
-        s.shadows.samples = 17;
+        s.shadows.samples = Some(17);
         assert_eq!(s.validate().unwrap_err().name, "shadow-samples");
         let mut s = RenderSettings::default();
         s.tiling.interleave = Some(0);
@@ -478,17 +486,28 @@ mod tests {
         assert!(s.warnings().is_empty());
     }
 
-    /// The shadow sample count is clamped and zero for unshadowed methods; no filter means no
-    /// passes.
+    /// The shadow sample count is the method's default unless given, clamped, and zero for
+    /// unshadowed methods; no filter means no passes.
     #[test]
     fn shadow_settings_resolve() {
         let s = ShadowSettings {
-            samples: 40,
+            samples: Some(40),
             filter: ShadowFilter::None,
             ..ShadowSettings::default()
         };
-        assert_eq!(s.k(true), MAX_SHADOW_SAMPLES as usize);
-        assert_eq!(s.k(false), 0);
+        assert_eq!(s.k(true, 5), MAX_SHADOW_SAMPLES as usize);
+        assert_eq!(s.k(false, 5), 0);
         assert_eq!(s.passes(), 0);
+        let d = ShadowSettings::default();
+        assert_eq!((d.k(true, 5), d.k(true, 4)), (5, 4));
+        let mut r = RenderSettings::default();
+        assert_eq!(r.shadow_samples(), lgh::DEFAULT_SHADOW_SAMPLES);
+        r.method = crate::methods::slc::SLC;
+        assert_eq!(
+            r.shadow_samples(),
+            crate::methods::slc::DEFAULT_SHADOW_SAMPLES
+        );
+        r.shadows.samples = Some(2);
+        assert_eq!(r.shadow_samples(), 2);
     }
 }

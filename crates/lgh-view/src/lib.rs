@@ -31,6 +31,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use lgh_render::RenderSettings;
+use lgh_render::methods::lgh;
 use lgh_render::settings::parse_size;
 
 /// Arguments of `lgh view`.
@@ -82,9 +83,14 @@ pub const INTERACTIVE_ALPHA: f32 = 1.0;
 impl ViewArgs {
     /// Starts at interactive settings where the command line leaves them (`given(id)` tells
     /// whether the flag of clap id `id` was given): alpha [`INTERACTIVE_ALPHA`] and S_1 the
-    /// lowest level shaded, one hierarchy (no normal bins), instead of the render defaults,
-    /// which favour accuracy.
+    /// lowest level shaded, one hierarchy (no normal bins), and for lgh 4 x 4 interleaving
+    /// ([`lgh::INTERACTIVE_INTERLEAVE`]), instead of the render defaults, which favour
+    /// accuracy.
     pub fn use_interactive_defaults(&mut self, given: impl Fn(&str) -> bool) {
+        let lgh_method = self.settings.method.name().starts_with("lgh");
+        if !given("interleave") && lgh_method {
+            self.settings.tiling.interleave = Some(lgh::INTERACTIVE_INTERLEAVE);
+        }
         if !given("alpha") {
             self.settings.lgh.alpha = INTERACTIVE_ALPHA;
         }

@@ -4,7 +4,7 @@
 //! and statistics never carry the text.
 
 use font8x8::{BASIC_FONTS, UnicodeFonts};
-use lgh_render::methods::lgh::DEFAULT_INTERLEAVE;
+use lgh_render::methods::lgh::INTERACTIVE_INTERLEAVE;
 
 use crate::engine::ShownFrame;
 use crate::state::{ViewState, control_lines};
@@ -29,8 +29,8 @@ pub fn readout(f: &ShownFrame, s: &ViewState) -> Vec<String> {
             "{}  alpha {}  interleave {}  k {}",
             st.method.name(),
             st.lgh.alpha,
-            st.tiling.interleave.unwrap_or(DEFAULT_INTERLEAVE),
-            st.shadows.samples,
+            st.tiling.interleave.unwrap_or(INTERACTIVE_INTERLEAVE),
+            st.shadow_samples(),
         ),
         match f.grid_lights {
             Some(g) => format!("{} VPLs  {g} grid lights", f.vpls),

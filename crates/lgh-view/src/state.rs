@@ -231,7 +231,7 @@ impl ViewState {
                 Some(format!("alpha: {}", s.lgh.alpha))
             }
             Action::NextInterleave => {
-                let n = match s.tiling.interleave.unwrap_or(lgh::DEFAULT_INTERLEAVE) {
+                let n = match s.tiling.interleave.unwrap_or(lgh::INTERACTIVE_INTERLEAVE) {
                     1 => 2,
                     2 => 4,
                     _ => 1,
@@ -240,12 +240,13 @@ impl ViewState {
                 Some(format!("interleaving: {n}x{n}"))
             }
             Action::NextShadowSamples => {
-                s.shadows.samples = match s.shadows.samples {
+                let k = match s.shadow_samples() {
                     0 => 1,
                     1 => 4,
                     _ => 0,
                 };
-                Some(format!("shadow samples: {}", s.shadows.samples))
+                s.shadows.samples = Some(k);
+                Some(format!("shadow samples: {k}"))
             }
             Action::ToggleFilter => {
                 use lgh_render::settings::ShadowFilter;

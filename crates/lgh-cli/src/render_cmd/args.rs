@@ -82,8 +82,8 @@ impl RenderArgs {
     /// `--shadow-samples` was `given` (by its argument id) or is 0 (no shadows).
     pub fn use_accumulation_defaults(&mut self, given: impl Fn(&str) -> bool) {
         let shadows = &mut self.settings.shadows;
-        if self.accumulate > 1 && !given("samples") && shadows.samples > 0 {
-            shadows.samples = lgh_render::accumulate::ACCUMULATE_SHADOW_SAMPLES;
+        if self.accumulate > 1 && !given("samples") && shadows.samples != Some(0) {
+            shadows.samples = Some(lgh_render::accumulate::ACCUMULATE_SHADOW_SAMPLES);
         }
     }
 }

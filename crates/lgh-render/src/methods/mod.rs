@@ -141,6 +141,11 @@ pub trait IndirectMethod: Sync + Send {
     fn illumination(&self) -> Illumination {
         Illumination::FromVpls
     }
+    /// Shadow samples per pixel when `--shadow-samples` is not given (for the methods that
+    /// trace shadow samples through the ratio estimator).
+    fn default_shadow_samples(&self) -> u32 {
+        0
+    }
     /// Renders one frame's share of the method. `memory` holds buffers that frames reuse.
     ///
     /// # Errors

@@ -95,7 +95,7 @@ fn slc(vpls: usize, ism: bool, shadow_samples: u32, method: Method) -> Frame {
             ..Tiling::default()
         },
         shadows: ShadowSettings {
-            samples: shadow_samples,
+            samples: Some(shadow_samples),
             ..ShadowSettings::default()
         },
         slc: SlcSettings {

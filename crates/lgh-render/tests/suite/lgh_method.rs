@@ -129,7 +129,7 @@ fn shadow_estimate_converges_to_brute_force_when_the_hierarchy_is_exact() {
         ..common::paper_lgh()
     };
     let sixteen = ShadowSettings {
-        samples: 16,
+        samples: Some(16),
         filter: ShadowFilter::None,
         ..ShadowSettings::default()
     };

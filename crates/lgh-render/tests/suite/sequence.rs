@@ -84,7 +84,7 @@ fn temporal_filtering_reduces_flicker() {
                 area_samples: 0,
                 ..settings(100 + f)
             };
-            s.shadows.samples = shadow_samples;
+            s.shadows.samples = Some(shadow_samples);
             if paper {
                 s.lgh = crate::common::paper_lgh();
                 s.tiling = crate::common::no_interleave();
@@ -97,7 +97,7 @@ fn temporal_filtering_reduces_flicker() {
         }
         total / 7.0
     };
-    let k = RenderSettings::default().shadows.samples;
+    let k = RenderSettings::default().shadow_samples();
     let indirect_taa = TemporalSettings {
         target: TemporalTarget::Indirect,
         ..TemporalSettings::default()

@@ -25,7 +25,7 @@ fn culled(frame_seed: u32, error_bound: f32) -> RenderSettings {
             ..Tiling::default()
         },
         shadows: ShadowSettings {
-            samples: 0,
+            samples: Some(0),
             ..ShadowSettings::default()
         },
         slc: SlcSettings {

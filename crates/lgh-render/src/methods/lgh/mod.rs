@@ -74,7 +74,7 @@ mod shade;
 
 use lights::{LghTargets, ShadeLights, split_by_normal};
 pub use settings::{
-    DEFAULT_INTERLEAVE, Estimator, JitterAt, LghSettings, ShadowTarget, auto_tile,
+    DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, INTERACTIVE_INTERLEAVE, JitterAt, LghSettings, ShadowTarget, auto_tile,
 };
 use shade::{RowContext, RowScratch, shade_rows};
 
@@ -107,6 +107,10 @@ impl IndirectMethod for Lgh {
         } else {
             "Lighting grid hierarchy without shadows"
         }
+    }
+
+    fn default_shadow_samples(&self) -> u32 {
+        DEFAULT_SHADOW_SAMPLES
     }
 
     fn render(
@@ -166,7 +170,7 @@ pub fn render_lgh(
     }));
     let mut t = Timings::default();
     let n_px = g.len();
-    let k = all.shadows.k(shadowed);
+    let k = all.shadows.k(shadowed, DEFAULT_SHADOW_SAMPLES);
     let n = all.tiling.interleave.unwrap_or(DEFAULT_INTERLEAVE).max(1);
     let mut stats = LghStats {
         alpha: settings.alpha,

@@ -205,9 +205,18 @@ impl LghSettings {
     }
 }
 
-/// The default n of n x n interleaved sampling for `lgh`: 4 (an extension of the paper's
-/// default, none; docs/design.md, "Defaults").
-pub const DEFAULT_INTERLEAVE: u32 = 4;
+/// The default n of n x n interleaved sampling for `lgh` renders: 2 (an extension of the
+/// paper's default, none; docs/design.md, "Defaults"). Interactive use takes 4
+/// ([`INTERACTIVE_INTERLEAVE`]).
+pub const DEFAULT_INTERLEAVE: u32 = 2;
+
+/// Shadow samples k per pixel of `lgh` when `--shadow-samples` is not given: 5, stratified
+/// (docs/design.md, "Defaults"; the paper's measurements use 1 and 4).
+pub const DEFAULT_SHADOW_SAMPLES: u32 = 5;
+
+/// The n of n x n interleaved sampling for interactive frame rates (the viewer's start,
+/// and the paper's real-time measurements): each pixel shades 1/16 of the lights.
+pub const INTERACTIVE_INTERLEAVE: u32 = 4;
 
 /// The default tile edge, in sub-image pixels, for n x n interleaving: 16 full-resolution
 /// pixels (16 / n sub-image pixels, at least 4). A sub-image tile of 16 sub-image pixels

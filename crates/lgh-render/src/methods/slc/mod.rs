@@ -55,6 +55,8 @@ const STREAM_SLC: u64 = 0x51c;
 
 /// The error bound epsilon_max of the light ranges when none is set (the paper's 0.0005).
 pub const DEFAULT_ERROR_BOUND: f32 = 0.0005;
+/// Shadow samples per pixel when `--shadow-samples` is not given.
+pub const DEFAULT_SHADOW_SAMPLES: u32 = 4;
 /// Interleaving n of n x n sub-images when none is set (the paper's 8).
 pub const DEFAULT_INTERLEAVE: u32 = 8;
 /// Screen tile edge in sub-image pixels when none is set.
@@ -131,6 +133,10 @@ impl IndirectMethod for Slc {
                 "Tiled lighting with light ranges clamped from the error bound (biased darker)"
             }
         }
+    }
+
+    fn default_shadow_samples(&self) -> u32 {
+        DEFAULT_SHADOW_SAMPLES
     }
 
     fn render(
@@ -243,7 +249,7 @@ pub fn render_slc(
         )
     });
     // Imperfect shadow maps replace the ray-traced shadow samples.
-    let k = all.shadows.k(ism.is_none());
+    let k = all.shadows.k(ism.is_none(), DEFAULT_SHADOW_SAMPLES);
     let maps = ism.map(|ism| {
         t.time("ism", || {
             let cloud = PointCloud::sample(world, ism.cloud_points as usize, seed);
