@@ -284,7 +284,7 @@ pub struct ErrorBound {
 
 impl RenderSettings {
     /// The shadow samples per pixel of the chosen method: `--shadow-samples`, or the
-    /// method's default ([`IndirectMethod::default_shadow_samples`]).
+    /// method's default ([`crate::methods::IndirectMethod::default_shadow_samples`]).
     #[must_use]
     pub fn shadow_samples(&self) -> u32 {
         self.shadows

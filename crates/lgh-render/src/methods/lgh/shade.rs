@@ -1,5 +1,5 @@
 //! The LGH lighting loop (Lin & Yuksel 2019 section 3.2 and Appendix A): per pixel, the
-//! unshadowed sum A over its tile's lights and the k reservoirs of shadow candidates.
+//! unshadowed sum A over its tile's lights and the k shadow samples drawn among them.
 
 use glam::Vec3;
 use lgh_core::blending::blend;
@@ -22,7 +22,7 @@ use crate::shading::tiles::InterleavedBins;
 /// Random-stream tag of the LGH lighting pass.
 const STREAM_LGH: u64 = 0x161;
 
-/// What the lighting loop of one row reads.
+/// What the lighting loop of a group of rows reads.
 pub(super) struct RowContext<'a> {
     pub(super) g: &'a GBuffer,
     pub(super) bins: &'a InterleavedBins,
