@@ -201,15 +201,19 @@ impl LightBatch {
             let (dx, dy, dz) = (px[l] - x.x, py[l] - x.y, pz[l] - x.z);
             let d2 = dx * dx + dy * dy + dz * dz;
             let reached = d2 < reach2[l];
-            let inv_d = 1.0 / d2.sqrt();
-            let t = d2 * inv_d * inv_r[l];
+            // One division for 1 / d and 1 / (pi (d^2 + eps^2)): q = 1 / (d (d^2 + eps^2)).
+            let d = d2.sqrt();
+            let den = d2 + eps2;
+            let q = 1.0 / (d * den);
+            let inv_d = q * den;
+            let t = d * inv_r[l];
             let rising = (2.0 * t - 1.0).clamp(0.0, 1.0).max(rise_off[l]);
             let falling = (2.0 - t).clamp(0.0, 1.0).max(fall_off[l]);
             let b = rising.min(falling);
             let cos_x = (n.x * dx + n.y * dy + n.z * dz) * inv_d;
             let cos_v = (-(mx[l] * dx + my[l] * dy + mz[l] * dz) * inv_d).max(0.0) + iso[l];
             let ok = reached && d2 > 0.0 && b > 0.0 && cos_x > 0.0 && cos_v > 0.0;
-            let v = b * cos_x * cos_v / (std::f32::consts::PI * (d2 + eps2));
+            let v = b * cos_x * cos_v * (q * d) * std::f32::consts::FRAC_1_PI;
             out.reached[l] = reached;
             g[l] = if ok { v } else { 0.0 };
         }
