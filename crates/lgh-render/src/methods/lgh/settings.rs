@@ -134,8 +134,8 @@ pub enum Selection {
     /// k independent single-slot reservoirs, each offered every candidate (LGH 2019
     /// Appendix A).
     Streaming,
-    /// The cumulative weight inverted at k stratified points
-    /// ([`crate::shading::reservoirs::stratified_picks`]); the default.
+    /// The pixel's cumulative weight inverted at k stratified points, one pass over its
+    /// lights (`shading::reservoirs::stratified_picks`); the default.
     Stratified,
 }
 
