@@ -59,6 +59,10 @@ impl RowContext<'_> {
     }
 }
 
+/// A chunk's index and its lights' B_l(d) f_j (RGB planes), as stratified selection
+/// evaluates it again.
+type ChunkValues = (usize, [[f32; LANES]; 3]);
+
 /// What a task of the lighting loop keeps from pixel to pixel.
 #[derive(Default)]
 pub(super) struct RowScratch {
@@ -169,104 +173,107 @@ fn shade_pixel(
     if batch.key != Some(key) {
         batch.fill(key, packed, bins.lights_at(x as u32, y as u32));
     }
-        let batch = &*batch;
-        chunk_weights.clear();
-        // A summed lane by lane over the chunks, reduced once per pixel.
-        let mut sum = [[0.0f32; LANES]; 3];
-        for chunk in 0..batch.chunks() {
-            let lanes = batch.eval(chunk, xp, n, eps2);
-            *overdraw += lanes.reached.iter().map(|&r| u32::from(r)).sum::<u32>();
-            for (s, v) in sum.iter_mut().zip(&lanes.value) {
-                for l in 0..LANES {
-                    s[l] += v[l];
-                }
-            }
-            if k == 0 {
-                continue;
-            }
-            // The selection weights f_j of the chunk's candidates (zero below the first
-            // candidate level). Stratified: only the chunk's sum is kept, the samples are
-            // drawn after the loop. Streaming: when no reservoir's replacement threshold is
-            // reached by the chunk's total, none takes any of its lights: the totals grow by
-            // the sum and the lights are passed over without a look (the common case once
-            // the reservoirs hold a sample; Reservoir::update_jump).
-            let lum = candidate_weights(batch, chunk, &lanes, candidates_from);
-            if stratified {
-                chunk_weights.push(lum.iter().sum());
-                continue;
-            }
-            if settings.jitter == JitterAt::Ray && pass_over(res, lum.iter().sum()) {
-                continue;
-            }
-            for (lane, &f) in lum.iter().enumerate() {
-                if f == 0.0 {
-                    continue;
-                }
-                let bc = Vec3::new(
-                    lanes.value[0][lane],
-                    lanes.value[1][lane],
-                    lanes.value[2][lane],
-                );
-                let e = chunk * LANES + lane;
-                let j = batch.index[e] as usize;
-                let pl = &packed[j];
-                if settings.jitter == JitterAt::Ray {
-                    // The target is drawn after selection; the light is read only if a
-                    // reservoir takes it.
-                    offer(res, || ctx.ray_sample(j, bc), f, &mut rng);
-                    continue;
-                }
-                let (p, nj, iso, ij) = (pl.position, pl.normal, pl.iso, pl.intensity);
-                let b = || blend(pl.role, (p - xp).length(), pl.radius);
-                let sample = if representative {
-                    let s = rng.next_u32() as usize % SLOTS;
-                    let Some((q, nq)) = lights.representative(j, s) else {
-                        continue;
-                    };
-                    ShadowSample {
-                        q,
-                        n: nq,
-                        f: b() * light_irradiance(xp, n, q, nq, 0.0, ij, eps2),
-                        jitter: Vec3::ZERO,
-                        light: j as u32,
-                        gain: Vec3::ONE,
-                    }
-                } else {
-                    let t = Vec3::new(
-                        raised_cosine(halves(rng.next_u32())),
-                        raised_cosine(halves(rng.next_u32())),
-                        raised_cosine(halves(rng.next_u32())),
-                    );
-                    let dev = lights.deviation[j] * settings.dev_scale;
-                    let q = p + t * dev;
-                    ShadowSample {
-                        q,
-                        n: nj,
-                        f: b() * light_irradiance(xp, n, q, nj, iso, ij, eps2),
-                        jitter: Vec3::ZERO,
-                        light: j as u32,
-                        gain: Vec3::ONE,
-                    }
-                };
-                offer(res, || sample, luminance(sample.f), &mut rng);
+    let batch = &*batch;
+    chunk_weights.clear();
+    // A summed lane by lane over the chunks, reduced once per pixel.
+    let mut sum = [[0.0f32; LANES]; 3];
+    for chunk in 0..batch.chunks() {
+        let lanes = batch.eval(chunk, xp, n, eps2);
+        *overdraw += lanes.reached.iter().map(|&r| u32::from(r)).sum::<u32>();
+        for (s, v) in sum.iter_mut().zip(&lanes.value) {
+            for l in 0..LANES {
+                s[l] += v[l];
             }
         }
-        *a += Vec3::from(sum.map(|s| s.iter().sum::<f32>()));
+        if k == 0 {
+            continue;
+        }
+        // The selection weights f_j of the chunk's candidates (zero below the first
+        // candidate level). Stratified: only the chunk's sum is kept, the samples are
+        // drawn after the loop. Streaming: when no reservoir's replacement threshold is
+        // reached by the chunk's total, none takes any of its lights: the totals grow by
+        // the sum and the lights are passed over without a look (the common case once
+        // the reservoirs hold a sample; Reservoir::update_jump).
+        let lum = candidate_weights(batch, chunk, &lanes, candidates_from);
         if stratified {
-            let lanes = |c: usize| {
-                let lanes = batch.eval(c, xp, n, eps2);
-                (candidate_weights(batch, c, &lanes, candidates_from), (c, lanes.value))
-            };
-            let take = |slot: usize, lane: usize, &(c, value): &(usize, [[f32; LANES]; 3]), f, total| {
-                let j = batch.index[c * LANES + lane] as usize;
-                let bc = Vec3::new(value[0][lane], value[1][lane], value[2][lane]);
-                res[slot] = Reservoir {
-                    total,
-                    weight: f,
-                    sample: Some(ctx.ray_sample(j, bc)),
-                    threshold: 0.0,
-                };
-            };
-            stratified_picks(chunk_weights, lanes, k, &mut rng, take);
+            chunk_weights.push(lum.iter().sum());
+            continue;
         }
+        if settings.jitter == JitterAt::Ray && pass_over(res, lum.iter().sum()) {
+            continue;
+        }
+        for (lane, &f) in lum.iter().enumerate() {
+            if f == 0.0 {
+                continue;
+            }
+            let bc = Vec3::new(
+                lanes.value[0][lane],
+                lanes.value[1][lane],
+                lanes.value[2][lane],
+            );
+            let e = chunk * LANES + lane;
+            let j = batch.index[e] as usize;
+            let pl = &packed[j];
+            if settings.jitter == JitterAt::Ray {
+                // The target is drawn after selection; the light is read only if a
+                // reservoir takes it.
+                offer(res, || ctx.ray_sample(j, bc), f, &mut rng);
+                continue;
+            }
+            let (p, nj, iso, ij) = (pl.position, pl.normal, pl.iso, pl.intensity);
+            let b = || blend(pl.role, (p - xp).length(), pl.radius);
+            let sample = if representative {
+                let s = rng.next_u32() as usize % SLOTS;
+                let Some((q, nq)) = lights.representative(j, s) else {
+                    continue;
+                };
+                ShadowSample {
+                    q,
+                    n: nq,
+                    f: b() * light_irradiance(xp, n, q, nq, 0.0, ij, eps2),
+                    jitter: Vec3::ZERO,
+                    light: j as u32,
+                    gain: Vec3::ONE,
+                }
+            } else {
+                let t = Vec3::new(
+                    raised_cosine(halves(rng.next_u32())),
+                    raised_cosine(halves(rng.next_u32())),
+                    raised_cosine(halves(rng.next_u32())),
+                );
+                let dev = lights.deviation[j] * settings.dev_scale;
+                let q = p + t * dev;
+                ShadowSample {
+                    q,
+                    n: nj,
+                    f: b() * light_irradiance(xp, n, q, nj, iso, ij, eps2),
+                    jitter: Vec3::ZERO,
+                    light: j as u32,
+                    gain: Vec3::ONE,
+                }
+            };
+            offer(res, || sample, luminance(sample.f), &mut rng);
+        }
+    }
+    *a += Vec3::from(sum.map(|s| s.iter().sum::<f32>()));
+    if stratified {
+        let lanes = |c: usize| {
+            let lanes = batch.eval(c, xp, n, eps2);
+            (
+                candidate_weights(batch, c, &lanes, candidates_from),
+                (c, lanes.value),
+            )
+        };
+        let take = |slot: usize, lane: usize, &(c, value): &ChunkValues, f, total| {
+            let j = batch.index[c * LANES + lane] as usize;
+            let bc = Vec3::new(value[0][lane], value[1][lane], value[2][lane]);
+            res[slot] = Reservoir {
+                total,
+                weight: f,
+                sample: Some(ctx.ray_sample(j, bc)),
+                threshold: 0.0,
+            };
+        };
+        stratified_picks(chunk_weights, lanes, k, &mut rng, take);
+    }
 }
