@@ -35,10 +35,16 @@ use crate::settings::{RenderError, RenderSettings};
 use crate::shading::ratio::ShadowRatio;
 use crate::world::World;
 
-/// Declares each method folder as a module and lists its methods in [`METHODS`].
+// The method folders, declared outside the registry macro so that rustfmt (which does not
+// look inside macro calls) formats them.
+pub mod brute;
+pub mod lgh;
+pub mod pt;
+pub mod slc;
+
+/// Lists the methods of each folder in [`METHODS`].
 macro_rules! register {
     ($($folder:ident => [$($method:ident),+],)+) => {
-        $(pub mod $folder;)+
         /// Every method, in the order `--help` lists them.
         pub static METHODS: &[Method] = &[$($($folder::$method,)+)+];
     };

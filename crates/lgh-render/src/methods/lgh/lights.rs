@@ -4,11 +4,11 @@
 
 use glam::Vec3;
 use lgh_core::blending::LevelRole;
-use lgh_core::lighting_grid::representative::{NONE, SLOTS, representatives};
 use lgh_core::color::luminance;
 use lgh_core::lighting_grid::descent::Descent;
 use lgh_core::lighting_grid::lookup::{VertexLookup, VertexRows};
 use lgh_core::lighting_grid::partition::{Partition, ShadedLevels};
+use lgh_core::lighting_grid::representative::{NONE, SLOTS, representatives};
 use lgh_core::lighting_grid::{Construction, LightingGrid};
 use lgh_core::reservoir::Reservoir;
 use lgh_core::rng::Rng;
@@ -231,7 +231,10 @@ impl ShadeLights {
         let slots = representatives(grid, &input, grid.l_max() + 1, construction, seed);
         let s1 = grid.level_range(1);
         let slots = &slots[SLOTS * s1.start..SLOTS * s1.end];
-        let reps = slots.par_chunks(SLOTS).map(|s| RepSet::of(s, vpls)).collect();
+        let reps = slots
+            .par_chunks(SLOTS)
+            .map(|s| RepSet::of(s, vpls))
+            .collect();
         let rows = VertexRows::new(grid);
         let vpl_lights = if levels.lowest == 0 { vpls.len() } else { 0 };
         self.hierarchies.push(Hierarchy {
@@ -341,7 +344,12 @@ impl ShadeLights {
         let (q, nq, vpl, mean_rho) = if j < h.grid_base {
             // A VPL shaded as S_0 stands for itself.
             let (q, nq) = (self.position[j], self.normal[j]);
-            (q, nq, j - h.first, representative_weight(xp, nx, q, nq, eps2))
+            (
+                q,
+                nq,
+                j - h.first,
+                representative_weight(xp, nx, q, nq, eps2),
+            )
         } else {
             let u = h.descent.to_level_one(j - h.grid_base, || rng.next_f32());
             let reps = &h.reps[u];

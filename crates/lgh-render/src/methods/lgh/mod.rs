@@ -51,8 +51,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
-use lgh_core::lighting_grid::partition::ShadedLevels;
 use lgh_core::lighting_grid::GridError;
+use lgh_core::lighting_grid::partition::ShadedLevels;
 use lgh_core::rng::Rng;
 use lgh_core::timing::Timings;
 use lgh_core::vpl::Vpls;
@@ -74,7 +74,8 @@ mod shade;
 
 use lights::{LghTargets, ShadeLights, split_by_normal};
 pub use settings::{
-    DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, INTERACTIVE_INTERLEAVE, JitterAt, LghSettings, ShadowTarget, auto_tile,
+    DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, INTERACTIVE_INTERLEAVE, JitterAt,
+    LghSettings, ShadowTarget, auto_tile,
 };
 use shade::{RowContext, RowScratch, shade_rows};
 
@@ -284,8 +285,7 @@ pub fn render_lgh(
         &mut shaded,
         RowScratch::default,
         |scratch, y0, rows, res| shade_rows(&ctx, y0, rows, res, scratch),
-        (representative && settings.jitter == JitterAt::Ray)
-            .then_some(&targets as &dyn Targets),
+        (representative && settings.jitter == JitterAt::Ray).then_some(&targets as &dyn Targets),
     );
     let overdraw: Vec<u32> = shaded.par_iter().map(|p| p.1).collect();
     stats.avg_overdraw = g.mean_over_hits(&overdraw);

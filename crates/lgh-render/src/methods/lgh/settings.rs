@@ -194,11 +194,20 @@ impl LghSettings {
             return None;
         }
         if self.shadow_target != ShadowTarget::Representative {
-            Some(("shadow-target", "representative with --estimator unbiased (or --estimator paper)"))
+            Some((
+                "shadow-target",
+                "representative with --estimator unbiased (or --estimator paper)",
+            ))
         } else if self.jitter != JitterAt::Ray {
-            Some(("jitter-at", "ray with --estimator unbiased (or --estimator paper)"))
+            Some((
+                "jitter-at",
+                "ray with --estimator unbiased (or --estimator paper)",
+            ))
         } else if self.construction == Construction::GatherFromS1 {
-            Some(("construction", "restrict or scatter with --estimator unbiased (or --estimator paper)"))
+            Some((
+                "construction",
+                "restrict or scatter with --estimator unbiased (or --estimator paper)",
+            ))
         } else {
             None
         }
