@@ -87,7 +87,7 @@ impl ViewArgs {
     /// ([`lgh::INTERACTIVE_INTERLEAVE`]), instead of the render defaults, which favour
     /// accuracy.
     pub fn use_interactive_defaults(&mut self, given: impl Fn(&str) -> bool) {
-        let lgh_method = self.settings.method.name().starts_with("lgh");
+        let lgh_method = [lgh::LGH, lgh::LGH_UNSHADOWED].contains(&self.settings.method);
         if !given("interleave") && lgh_method {
             self.settings.tiling.interleave = Some(lgh::INTERACTIVE_INTERLEAVE);
         }
