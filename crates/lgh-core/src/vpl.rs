@@ -66,6 +66,14 @@ impl Vpls {
         self.flux.extend_from_slice(&other.flux);
     }
 
+    /// Appends the first `n` VPLs of `other` (all of them if it has fewer).
+    pub fn extend_prefix(&mut self, other: &Vpls, n: usize) {
+        let n = n.min(other.len());
+        self.positions.extend_from_slice(&other.positions[..n]);
+        self.normals.extend_from_slice(&other.normals[..n]);
+        self.flux.extend_from_slice(&other.flux[..n]);
+    }
+
     /// Multiplies every flux by `s`.
     pub fn scale_flux(&mut self, s: f32) {
         for f in &mut self.flux {

@@ -146,7 +146,7 @@ pub fn render_frame_with(
         vec![Vec3::ZERO; g.len()]
     } else {
         let out = t.time("direct", || {
-            let filter = &mut memory.filter;
+            let filter = &mut memory.direct_filter;
             render_direct(
                 world,
                 &g,

@@ -5,8 +5,8 @@ use lgh_core::lighting_grid::GridBuilder;
 use crate::denoise::atrous::AtrousBuffers;
 use crate::passes::gbuffer::GBuffer;
 
-/// Working memory that frames reuse: the hierarchy builder's and the shadow filter's (about
-/// 90 MB at 1280x720), and the G-buffer of a frame handed back with
+/// Working memory that frames reuse: the hierarchy builder's, the shadow filters' (about
+/// 90 MB each at 1280x720), and the G-buffer of a frame handed back with
 /// [`FrameMemory::recycle_gbuffer`]. A renderer of frame after frame keeps one
 /// ([`crate::frame::render_frame_with`]), so that no frame pays for paging in fresh memory.
 /// A clone is empty: it is only a cache.
@@ -14,8 +14,13 @@ use crate::passes::gbuffer::GBuffer;
 pub struct FrameMemory {
     /// The lighting grid hierarchy builder.
     pub grid: GridBuilder,
-    /// The a-trous filter's planes.
+    /// The a-trous planes of the indirect light's shadow filter.
     pub filter: AtrousBuffers,
+    /// The a-trous planes of the direct light's filter: its own, because its one pass lays
+    /// the planes out with a narrower padding than the indirect filter's passes, and planes
+    /// shared between the two would be laid out afresh (reallocated and paged in) twice a
+    /// frame.
+    pub direct_filter: AtrousBuffers,
     /// Planes for the next frame's G-buffer (1280x720: 57 MB).
     pub gbuffer: Option<GBuffer>,
 }

@@ -16,7 +16,6 @@
 //! unshadowed indirect light flicker about 25% less from frame to frame when the VPLs are
 //! regenerated every frame, and the total flux vary far less.
 
-use glam::Vec3;
 use lgh_core::qmc::{PathSampler, Sampler};
 use lgh_core::rng::{Rng, hash};
 use lgh_core::sampling::cosine_hemisphere;
@@ -27,8 +26,10 @@ use crate::world::World;
 
 /// Random-stream tag of light paths.
 const STREAM_VPL: u64 = 0x7e1;
-/// Paths traced per parallel batch.
-const BATCH: u64 = 16_384;
+/// Light paths per parallel task.
+const CHUNK: u64 = 1024;
+/// The most paths traced in one parallel batch.
+const MAX_BATCH: u64 = 1 << 20;
 
 /// Where the uniform numbers of the light paths come from.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -55,6 +56,13 @@ pub struct VplSet {
 /// Traces light paths until at least `target` VPLs exist (whole paths only, so the count may
 /// exceed it by up to `bounces - 1`), or until `64 target + 10^6` paths have been traced in a
 /// scene where light escapes. Deterministic for a given `seed`, whatever the thread count.
+///
+/// The paths are traced in parallel batches, each path k with its own numbers, and kept in
+/// order of k up to the first path that reaches `target`. The first batch has `target /
+/// bounces` paths (no path leaves more than `bounces` VPLs, so none is wasted); later ones
+/// as many as the VPLs per path seen so far say are missing, plus 5%, so that few paths are
+/// traced beyond the last one kept. Each task writes its paths' VPLs into one list of its
+/// own, with each path's count for the cut.
 #[must_use]
 pub fn generate_vpls(
     world: &World,
@@ -70,37 +78,66 @@ pub fn generate_vpls(
         return VplSet { vpls, paths };
     }
     let sobol_seed = hash(&[seed, STREAM_VPL]);
+    let path = |k: u64, out: &mut Vpls| match numbers {
+        PathNumbers::Sobol => trace_path(world, bounces, &mut PathSampler::new(sobol_seed, k), out),
+        PathNumbers::Random => {
+            trace_path(world, bounces, &mut Rng::new(&[seed, k, STREAM_VPL]), out)
+        }
+    };
     'batches: while paths < max_paths {
-        let batch: Vec<Vec<(Vec3, Vec3, Vec3)>> = (paths..paths + BATCH)
+        let missing = (target - vpls.len()) as f64;
+        let planned = if paths == 0 {
+            missing / f64::from(bounces)
+        } else {
+            1.05 * missing * paths as f64 / vpls.len().max(1) as f64
+        };
+        let n = (planned.ceil() as u64)
+            .clamp(CHUNK, MAX_BATCH)
+            .min(max_paths - paths);
+        let first = paths;
+        let chunks: Vec<(Vpls, Vec<u32>)> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
-            .map(|k| match numbers {
-                PathNumbers::Sobol => {
-                    trace_path(world, bounces, &mut PathSampler::new(sobol_seed, k))
-                }
-                PathNumbers::Random => {
-                    trace_path(world, bounces, &mut Rng::new(&[seed, k, STREAM_VPL]))
-                }
+            .map(|c| {
+                let ks = first + c * CHUNK..first + ((c + 1) * CHUNK).min(n);
+                let mut out = Vpls::with_capacity(ks.clone().count() * bounces.min(4) as usize);
+                let counts = ks
+                    .map(|k| {
+                        let before = out.len();
+                        path(k, &mut out);
+                        (out.len() - before) as u32
+                    })
+                    .collect();
+                (out, counts)
             })
             .collect();
-        for path in batch {
-            paths += 1;
-            for (p, n, f) in path {
-                vpls.push(p, n, f);
+        for (chunk, counts) in chunks {
+            if vpls.len() + chunk.len() < target {
+                vpls.extend(&chunk);
+                paths += counts.len() as u64;
+                continue;
             }
-            if vpls.len() >= target {
-                break 'batches;
+            // The paths of this chunk up to the one that reaches the target.
+            let mut take = 0;
+            for c in counts {
+                take += c as usize;
+                paths += 1;
+                if vpls.len() + take >= target {
+                    break;
+                }
             }
+            vpls.extend_prefix(&chunk, take);
+            break 'batches;
         }
     }
     vpls.scale_flux(1.0 / paths as f32);
     VplSet { vpls, paths }
 }
 
-/// One light path: the (position, normal, unnormalised flux) of each VPL it leaves.
-fn trace_path(world: &World, bounces: u32, rng: &mut impl Sampler) -> Vec<(Vec3, Vec3, Vec3)> {
-    let mut out = Vec::with_capacity(bounces as usize);
+/// One light path: appends the VPL (position, normal, unnormalised flux) of each diffuse
+/// hit to `out`, at most `bounces` of them.
+fn trace_path(world: &World, bounces: u32, rng: &mut impl Sampler, out: &mut Vpls) {
     let Some(ray) = world.lights.sample_emission(rng) else {
-        return out;
+        return;
     };
     let (mut origin, mut dir, mut flux) = (ray.origin, ray.dir, ray.flux);
     for bounce in 0..bounces {
@@ -111,7 +148,7 @@ fn trace_path(world: &World, bounces: u32, rng: &mut impl Sampler) -> Vec<(Vec3,
         if reflected.max_element() <= 0.0 || !reflected.is_finite() {
             break;
         }
-        out.push((s.position, s.normal, reflected));
+        out.push(s.position, s.normal, reflected);
         if bounce + 1 == bounces {
             break;
         }
@@ -126,12 +163,12 @@ fn trace_path(world: &World, bounces: u32, rng: &mut impl Sampler) -> Vec<(Vec3,
         }
         origin = world.offset(s.position, s.geo_normal, dir);
     }
-    out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
 
     /// The mean over `paths` light paths of `f(path)`.
     fn mean_over(paths: u64, f: impl FnMut(u64) -> Vec3) -> Vec3 {
@@ -145,18 +182,29 @@ mod tests {
     #[test]
     fn stratified_paths_vary_less_between_frames() {
         let world = World::new(lgh_scene::cornell::cornell_box());
-        let first_vpl = |path: Vec<(Vec3, Vec3, Vec3)>| {
-            path.first()
-                .map_or(Vec3::ZERO, |&(p, _, f)| p * f.element_sum())
+        // The first VPL of a path, weighted by its flux.
+        let first_vpl = |out: Vpls| {
+            out.positions
+                .first()
+                .map_or(Vec3::ZERO, |&p| p * out.flux[0].element_sum())
+        };
+        let path = |sampler: &mut dyn FnMut(&mut Vpls)| {
+            let mut out = Vpls::default();
+            sampler(&mut out);
+            out
         };
         let mut qmc = Vec::new();
         let mut rnd = Vec::new();
         for seed in 0..40u64 {
             qmc.push(mean_over(2000, |k| {
-                first_vpl(trace_path(&world, 1, &mut PathSampler::new(seed, k)))
+                first_vpl(path(&mut |out| {
+                    trace_path(&world, 1, &mut PathSampler::new(seed, k), out);
+                }))
             }));
             rnd.push(mean_over(2000, |k| {
-                first_vpl(trace_path(&world, 1, &mut Rng::new(&[seed, k])))
+                first_vpl(path(&mut |out| {
+                    trace_path(&world, 1, &mut Rng::new(&[seed, k]), out);
+                }))
             }));
         }
         let stats = |v: &[Vec3]| {
