@@ -49,6 +49,7 @@ impl Sequence {
         let Some(taa) = self.taa else {
             return Ok(f);
         };
+        let start = std::time::Instant::now();
         let indirect = match (taa.target, &f.method.unshadowed, &f.method.shadow_ratio) {
             (TemporalTarget::ShadowRatio, Some(a), Some(ratio)) => {
                 let r = &ratio.filtered;
@@ -66,6 +67,9 @@ impl Sequence {
             }
         };
         f.set_indirect(indirect, settings.component);
+        f.timings
+            .0
+            .push(("temporal".into(), start.elapsed().as_secs_f64() * 1e3));
         Ok(f)
     }
 }

@@ -112,6 +112,7 @@ impl FrameLoop {
             self.sequence.render(&self.world, &settings, &Silent)?
         };
         self.shown_version = Some(state.version);
+        let display_start = Instant::now();
         let pixels = &frame.image.pixels;
         if self.accumulated == 0 || self.sum.len() != pixels.len() {
             self.sum.clone_from(pixels);
@@ -141,11 +142,16 @@ impl FrameLoop {
             .map(|c| (u32::from(c[0]) << 16) | (u32::from(c[1]) << 8) | u32::from(c[2]))
             .collect();
         let lgh_stats = frame.stats::<LghStats>();
+        let mut timings = frame.timings.0.clone();
+        timings.push((
+            "display".into(),
+            display_start.elapsed().as_secs_f64() * 1e3,
+        ));
         let shown = ShownFrame {
             image: Image::from_pixels(frame.image.width, frame.image.height, mean),
             pixels: packed,
             exposure,
-            timings: frame.timings.0.clone(),
+            timings,
             vpls: frame.vpls.vpls.len(),
             grid_lights: lgh_stats.map(|s| s.grid_lights),
             levels: lgh_stats.map(|s| (state.settings.lgh.start_level.min(1), s.levels)),

@@ -138,36 +138,36 @@ impl CellRuns {
         // Cells per axis at level 1 are a power of two: the key packs (z, y, x) in `b` bits
         // each, so that key >> b is the row.
         let b = r.trailing_zeros();
-        let mut order: Vec<(u64, u32, Vec3, f32)> = lights
+        // One u64 per light, cell key above the light's index (at most 3 x 9 + 32 bits): a
+        // sort of plain integers, several times faster than of the lights' records, gives
+        // the order by (cell, index); the records are gathered after it.
+        let (mut order, located): (Vec<u64>, Vec<(Vec3, f32)>) = lights
             .positions
             .par_iter()
             .zip(lights.intensity.par_iter())
             .enumerate()
             .map(|(i, (&p, &intensity))| {
                 let (c, f) = grid.locate(1, p);
-                (
-                    (u64::from(c.z) << (2 * b)) | (u64::from(c.y) << b) | u64::from(c.x),
-                    i as u32,
-                    f,
-                    luminance(intensity),
-                )
+                let cell = (u64::from(c.z) << (2 * b)) | (u64::from(c.y) << b) | u64::from(c.x);
+                ((cell << 32) | i as u64, (f, luminance(intensity)))
             })
-            .collect();
-        order.par_sort_unstable_by_key(|e| (e.0, e.1));
+            .unzip();
+        order.par_sort_unstable();
+        let cell = |k: usize| order[k] >> 32;
         let starts: Vec<u32> = (0..order.len())
             .into_par_iter()
-            .filter(|&k| k == 0 || order[k].0 != order[k - 1].0)
+            .filter(|&k| k == 0 || cell(k) != cell(k - 1))
             .map(|k| k as u32)
             .collect();
         let mask = (1u64 << b) - 1;
         let run_x = starts
             .iter()
-            .map(|&k| (order[k as usize].0 & mask) as u32)
+            .map(|&k| (cell(k as usize) & mask) as u32)
             .collect();
         let rows = r as usize * r as usize;
         let mut row_start = vec![0u32; rows + 1];
         for &k in &starts {
-            row_start[(order[k as usize].0 >> b) as usize + 1] += 1;
+            row_start[(cell(k as usize) >> b) as usize + 1] += 1;
         }
         for k in 1..=rows {
             row_start[k] += row_start[k - 1];
@@ -175,8 +175,12 @@ impl CellRuns {
         let mut run_start = starts;
         run_start.push(order.len() as u32);
         let lights = order
-            .into_par_iter()
-            .map(|(_, i, f, lum)| (i, f, lum))
+            .par_iter()
+            .map(|&key| {
+                let i = key as u32;
+                let (f, lum) = located[i as usize];
+                (i, f, lum)
+            })
             .collect();
         Self {
             lights,

@@ -50,26 +50,28 @@ pub(super) struct ShadeLights {
 /// its centroids by vertex for Lambda_i, the children of its lights for the draw of an S_1
 /// light, and its VPLs' flux for their colour.
 struct Hierarchy {
-    /// The representatives of its S_1 lights (by grid index), and their VPLs' indices.
+    /// The representatives of its S_1 lights (by grid index).
     reps: Vec<RepSet>,
-    rep_vpl: Vec<u32>,
     partition: Partition,
     descent: Descent,
-    flux: Vec<Vec3>,
     /// Index in [`ShadeLights`] of the hierarchy's first light.
     first: usize,
     /// Index in [`ShadeLights`] of its grid light 0 (after the VPLs if they are shaded).
     grid_base: usize,
 }
 
-/// The [`SLOTS`] representative VPLs of one light, structure of arrays (positions and
-/// normals per axis), so that weighing all of them for a pixel is a few vector operations on
-/// three cache lines. A zero normal marks an empty slot.
+/// The [`SLOTS`] representative VPLs of one light, structure of arrays (positions, normals
+/// and flux colours per axis), so that weighing all of them for a pixel is a few vector
+/// operations on adjacent cache lines. A zero normal marks an empty slot. The colour of
+/// each VPL's flux ([`chroma`]) is kept here so that the unbiased estimate's gain needs no
+/// read of the VPL itself: a pass that draws targets for pixel after pixel waits on memory
+/// for each such read, and those lines sit next to the ones the weights have just read.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(align(64))]
 struct RepSet {
     position: [[f32; SLOTS]; 3],
     normal: [[f32; SLOTS]; 3],
+    colour: [[f32; SLOTS]; 3],
 }
 
 impl RepSet {
@@ -83,11 +85,19 @@ impl RepSet {
         )
     }
 
-    /// Sets slot `s` to a VPL at `p` with normal `n`.
-    fn set(&mut self, s: usize, p: Vec3, n: Vec3) {
+    /// The flux colour of slot `s`.
+    fn colour(&self, s: usize) -> Vec3 {
+        let [r, g, b] = &self.colour;
+        Vec3::new(r[s], g[s], b[s])
+    }
+
+    /// Sets slot `s` to a VPL at `p` with normal `n` and flux `flux`.
+    fn set(&mut self, s: usize, p: Vec3, n: Vec3, flux: Vec3) {
+        let colour = chroma(flux);
         for a in 0..3 {
             self.position[a][s] = p[a];
             self.normal[a][s] = n[a];
+            self.colour[a][s] = colour[a];
         }
     }
 
@@ -96,7 +106,8 @@ impl RepSet {
         let mut set = Self::default();
         for (s, &r) in slots.iter().enumerate() {
             if r != NONE {
-                set.set(s, vpls.positions[r as usize], vpls.normals[r as usize]);
+                let r = r as usize;
+                set.set(s, vpls.positions[r], vpls.normals[r], vpls.flux[r]);
             }
         }
         set
@@ -196,14 +207,13 @@ impl ShadeLights {
         let reps = representatives(grid, &vpls.as_input(), from_level, construction, seed);
         if lowest == 0 {
             // A VPL stands for itself.
-            self.reps
-                .extend(vpls.positions.iter().zip(&vpls.normals).map(|(&p, &n)| {
-                    let mut set = RepSet::default();
-                    for s in 0..SLOTS {
-                        set.set(s, p, n);
-                    }
-                    set
-                }));
+            self.reps.extend((0..vpls.len()).map(|i| {
+                let mut set = RepSet::default();
+                for s in 0..SLOTS {
+                    set.set(s, vpls.positions[i], vpls.normals[i], vpls.flux[i]);
+                }
+                set
+            }));
         }
         let first = grid.level_range(1).start;
         self.reps.extend(
@@ -239,10 +249,8 @@ impl ShadeLights {
         let vpl_lights = if levels.lowest == 0 { vpls.len() } else { 0 };
         self.hierarchies.push(Hierarchy {
             reps,
-            rep_vpl: slots.to_vec(),
             partition: Partition::new(grid, levels),
             descent: Descent::new(VertexLookup::new(grid, &rows)),
-            flux: vpls.flux.clone(),
             first,
             grid_base: first + vpl_lights,
         });
@@ -340,16 +348,14 @@ impl ShadeLights {
         let h = self.hierarchy_of(j);
         // No ray unless a VPL below j lights the pixel (U still counts j).
         sample.gain = Vec3::ZERO;
-        // The VPL the ray goes to, as (position, normal, index), and sum rho / SLOTS.
-        let (q, nq, vpl, mean_rho) = if j < h.grid_base {
-            // A VPL shaded as S_0 stands for itself.
+        // The VPL the ray goes to, as (position, normal, colour relative to j's), and sum
+        // rho / SLOTS. The colour of j is that of its contribution f (a scalar multiple of
+        // its intensity), already at hand: reading I_j would be one more wait on memory.
+        let (q, nq, colour, mean_rho) = if j < h.grid_base {
+            // A VPL shaded as S_0 stands for itself, in its own colour.
             let (q, nq) = (self.position[j], self.normal[j]);
-            (
-                q,
-                nq,
-                j - h.first,
-                representative_weight(xp, nx, q, nq, eps2),
-            )
+            let rho = representative_weight(xp, nx, q, nq, eps2);
+            (q, nq, Vec3::ONE, rho)
         } else {
             let u = h.descent.to_level_one(j - h.grid_base, || rng.next_f32());
             let reps = &h.reps[u];
@@ -360,13 +366,12 @@ impl ShadeLights {
             }
             let pick = pick_weighted(&weights, total, rng.next_f32());
             let (q, nq) = reps.get(pick);
-            let vpl = h.rep_vpl[SLOTS * u + pick] as usize;
-            (q, nq, vpl, total / SLOTS as f32)
+            let colour = relative_colour(reps.colour(pick), chroma(sample.f));
+            (q, nq, colour, total / SLOTS as f32)
         };
         if mean_rho <= 0.0 {
             return;
         }
-        let colour = chroma(h.flux[vpl]) / chroma(self.intensity[j]);
         (sample.q, sample.n) = (q, nq);
         sample.gain = colour * mean_rho;
     }
@@ -456,9 +461,17 @@ fn pick_weighted(weights: &[f32; SLOTS], total: f32, u: f32) -> usize {
     SLOTS - 1
 }
 
-/// An RGB value divided by its luminance (its colour at unit luminance).
+/// An RGB value divided by its luminance (its colour at unit luminance); zero for a value
+/// without luminance.
 fn chroma(c: Vec3) -> Vec3 {
-    c / luminance(c)
+    let lum = luminance(c);
+    if lum > 0.0 { c / lum } else { Vec3::ZERO }
+}
+
+/// The colour `c` relative to the colour `of` channel by channel, zero in a channel where
+/// `of` has none: a light with no flux in a channel has no VPL with flux in it either.
+fn relative_colour(c: Vec3, of: Vec3) -> Vec3 {
+    Vec3::select(of.cmpgt(Vec3::ZERO), c / of, Vec3::ZERO)
 }
 
 /// The contribution at x (normal n_x) of a representative VPL at q (normal n_q) as a VPL
@@ -500,6 +513,20 @@ mod tests {
     use lgh_core::color::luminance;
     use lgh_core::rng::Rng;
     use lgh_core::vpl::light_irradiance;
+
+    /// A light or VPL with no flux in a channel (a pure-red wall's VPLs) gives a finite
+    /// colour, zero in that channel, and a VPL without flux no colour: divided channel by
+    /// channel, 0 / 0 would put NaN in the sample's gain.
+    #[test]
+    fn colours_of_lights_without_some_channel_stay_finite() {
+        let red = Vec3::new(0.8, 0.0, 0.0);
+        let vpl = Vec3::new(0.3, 0.0, 0.0);
+        let c = relative_colour(chroma(vpl), chroma(red));
+        assert_eq!(c, Vec3::new(1.0, 0.0, 0.0));
+        assert_eq!(chroma(Vec3::ZERO), Vec3::ZERO);
+        let mixed = relative_colour(chroma(Vec3::new(0.1, 0.2, 0.0)), chroma(Vec3::ONE));
+        assert!(mixed.is_finite() && mixed.z == 0.0 && mixed.y > mixed.x);
+    }
 
     /// The representatives' weight is their VPL contribution divided by luminance(I) / pi,
     /// for random positions and normals (both sides of both surfaces), and zero at d = 0.
