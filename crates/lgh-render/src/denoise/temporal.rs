@@ -118,27 +118,31 @@ impl History {
 pub fn reproject(h: &History, g: &GBuffer, s: &TemporalSettings) -> Vec<Option<Vec3>> {
     (0..g.len())
         .into_par_iter()
-        .map(|i| {
-            if !g.is_hit(i) {
-                return None;
-            }
-            let (px, z) = h.frame.project(g.position[i])?;
-            if px.x < 0.0 || px.y < 0.0 {
-                return None;
-            }
-            let (x, y) = (px.x as u32, px.y as u32);
-            if x >= h.width || y >= h.height {
-                return None;
-            }
-            let j = (y * h.width + x) as usize;
-            let dz = (h.depth[j] - z).abs();
-            let same_depth = dz <= s.depth_tolerance * z;
-            if !same_depth || h.normal[j].dot(g.normal[i]) < s.normal_cos {
-                return None;
-            }
-            Some(h.value[j])
-        })
+        .map(|i| reproject_pixel(h, g, s, i))
         .collect()
+}
+
+/// [`reproject`] for pixel `i`.
+#[inline]
+fn reproject_pixel(h: &History, g: &GBuffer, s: &TemporalSettings, i: usize) -> Option<Vec3> {
+    if !g.is_hit(i) {
+        return None;
+    }
+    let (px, z) = h.frame.project(g.position[i])?;
+    if px.x < 0.0 || px.y < 0.0 {
+        return None;
+    }
+    let (x, y) = (px.x as u32, px.y as u32);
+    if x >= h.width || y >= h.height {
+        return None;
+    }
+    let j = (y * h.width + x) as usize;
+    let dz = (h.depth[j] - z).abs();
+    let same_depth = dz <= s.depth_tolerance * z;
+    if !same_depth || h.normal[j].dot(g.normal[i]) < s.normal_cos {
+        return None;
+    }
+    Some(h.value[j])
 }
 
 /// The moving average of `current` with the reprojected `previous`, each previous value
@@ -152,27 +156,38 @@ pub fn blend(
     g: &GBuffer,
     alpha: f32,
 ) -> Vec<Vec3> {
-    let (w, h) = (g.width as usize, g.height as usize);
-    (0..w * h)
+    (0..g.len())
         .into_par_iter()
-        .map(|i| {
-            let Some(prev) = previous[i] else {
-                return current[i];
-            };
-            let (x, y) = (i % w, i / w);
-            let (mut lo, mut hi) = (current[i], current[i]);
-            for yy in y.saturating_sub(1)..(y + 2).min(h) {
-                for xx in x.saturating_sub(1)..(x + 2).min(w) {
-                    let j = yy * w + xx;
-                    if g.is_hit(j) {
-                        lo = lo.min(spread[j]);
-                        hi = hi.max(spread[j]);
-                    }
-                }
-            }
-            current[i] * alpha + prev.clamp(lo, hi) * (1.0 - alpha)
-        })
+        .map(|i| blend_pixel(current, spread, previous[i], g, alpha, i))
         .collect()
+}
+
+/// [`blend`] for pixel `i`, whose previous value is `previous`.
+#[inline]
+fn blend_pixel(
+    current: &[Vec3],
+    spread: &[Vec3],
+    previous: Option<Vec3>,
+    g: &GBuffer,
+    alpha: f32,
+    i: usize,
+) -> Vec3 {
+    let Some(prev) = previous else {
+        return current[i];
+    };
+    let (w, h) = (g.width as usize, g.height as usize);
+    let (x, y) = (i % w, i / w);
+    let (mut lo, mut hi) = (current[i], current[i]);
+    for yy in y.saturating_sub(1)..(y + 2).min(h) {
+        for xx in x.saturating_sub(1)..(x + 2).min(w) {
+            let j = yy * w + xx;
+            if g.is_hit(j) {
+                lo = lo.min(spread[j]);
+                hi = hi.max(spread[j]);
+            }
+        }
+    }
+    current[i] * alpha + prev.clamp(lo, hi) * (1.0 - alpha)
 }
 
 /// A temporal filter that keeps its history between frames.
@@ -194,11 +209,24 @@ impl TemporalFilter {
         spread: &[Vec3],
         s: &TemporalSettings,
     ) -> Vec<Vec3> {
-        let out = match &self.history {
-            Some(h) => blend(value, spread, &reproject(h, g, s), g, s.alpha),
+        // Reprojection and blend in one pass, and the history's planes refilled in place:
+        // no intermediate image, no fresh memory to page in.
+        let out: Vec<Vec3> = match &self.history {
+            Some(h) => (0..g.len())
+                .into_par_iter()
+                .map(|i| blend_pixel(value, spread, reproject_pixel(h, g, s, i), g, s.alpha, i))
+                .collect(),
             None => value.to_vec(),
         };
-        self.history = Some(History::new(frame, g, out.clone()));
+        match &mut self.history {
+            Some(h) => {
+                (h.frame, h.width, h.height) = (frame, g.width, g.height);
+                h.depth.clone_from(&g.depth);
+                h.normal.clone_from(&g.normal);
+                h.value.clone_from(&out);
+            }
+            None => self.history = Some(History::new(frame, g, out.clone())),
+        }
         out
     }
 }
