@@ -10,7 +10,7 @@ use std::time::Instant;
 use glam::Vec3;
 use lgh_render::accumulate::frame_settings;
 use lgh_render::image::heat::{HEAT_EXPOSURE, heat_map};
-use lgh_render::image::tonemap::tonemap_to_srgb8;
+use lgh_render::image::tonemap::tonemap_pixel;
 use lgh_render::methods::lgh::LghStats;
 use lgh_render::sequence::Sequence;
 use lgh_render::{FrameMemory, Image, RenderError, Silent, World, render_frame_with};
@@ -124,8 +124,12 @@ impl FrameLoop {
                 .for_each(|(s, p)| *s += *p);
             self.accumulated += 1;
         }
-        let inv = 1.0 / self.accumulated as f32;
-        let mut mean: Vec<Vec3> = self.sum.par_iter().map(|s| *s * inv).collect();
+        let mut mean: Vec<Vec3> = if self.accumulated == 1 {
+            self.sum.clone()
+        } else {
+            let inv = 1.0 / self.accumulated as f32;
+            self.sum.par_iter().map(|s| *s * inv).collect()
+        };
         let mut exposure = self.exposure;
         let mut overdraw = None;
         if state.heatmap
@@ -136,10 +140,12 @@ impl FrameLoop {
             mean = colours;
             exposure = HEAT_EXPOSURE;
         }
-        let rgb = tonemap_to_srgb8(&mean, exposure);
-        let packed = rgb
-            .par_chunks_exact(3)
-            .map(|c| (u32::from(c[0]) << 16) | (u32::from(c[1]) << 8) | u32::from(c[2]))
+        let packed = mean
+            .par_iter()
+            .map(|&p| {
+                let [r, g, b] = tonemap_pixel(p, exposure);
+                (u32::from(r) << 16) | (u32::from(g) << 8) | u32::from(b)
+            })
             .collect();
         let lgh_stats = frame.stats::<LghStats>();
         let mut timings = frame.timings.0.clone();

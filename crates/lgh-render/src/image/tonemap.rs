@@ -29,16 +29,22 @@ pub fn linear_to_srgb(c: f32) -> f32 {
     }
 }
 
+/// Tone-maps one linear pixel to 8-bit sRGB (R, G, B).
+#[inline]
+#[must_use]
+pub fn tonemap_pixel(p: Vec3, exposure: f32) -> [u8; 3] {
+    let p = finite_or_zero(p) * exposure;
+    [p.x, p.y, p.z].map(|c| (linear_to_srgb(aces(c)) * 255.0 + 0.5) as u8)
+}
+
 /// Tone-maps linear pixels to 8-bit sRGB bytes (RGB, 3 bytes a pixel).
 #[must_use]
 pub fn tonemap_to_srgb8(pixels: &[Vec3], exposure: f32) -> Vec<u8> {
-    pixels
-        .par_iter()
-        .flat_map_iter(|&p| {
-            let p = finite_or_zero(p) * exposure;
-            [p.x, p.y, p.z].map(|c| (linear_to_srgb(aces(c)) * 255.0 + 0.5) as u8)
-        })
-        .collect()
+    let mut out = vec![0u8; 3 * pixels.len()];
+    out.par_chunks_exact_mut(3)
+        .zip(pixels.par_iter())
+        .for_each(|(o, &p)| o.copy_from_slice(&tonemap_pixel(p, exposure)));
+    out
 }
 
 #[cfg(test)]
