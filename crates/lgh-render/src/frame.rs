@@ -18,6 +18,7 @@ use std::time::Instant;
 use glam::Vec3;
 use lgh_core::timing::Timings;
 use lgh_scene::camera::CameraFrame;
+use rayon::prelude::*;
 
 use crate::direct::render_direct;
 use crate::image::Image;
@@ -58,6 +59,7 @@ pub struct Frame {
 /// The output image of `component` from a frame's parts.
 fn compose(component: Component, emission: &Image, direct: &Image, indirect: &Image) -> Image {
     let pixels = (0..emission.pixels.len())
+        .into_par_iter()
         .map(|i| {
             let e = emission.pixels[i];
             match component {

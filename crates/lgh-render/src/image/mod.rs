@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use lgh_core::color::finite_or_zero;
+use rayon::prelude::*;
 
 use crate::settings::MAX_PIXELS;
 
@@ -88,12 +89,13 @@ impl Image {
 
     /// An image from pixels; every non-finite component becomes zero.
     #[must_use]
-    pub fn from_pixels(width: u32, height: u32, pixels: Vec<Vec3>) -> Self {
+    pub fn from_pixels(width: u32, height: u32, mut pixels: Vec<Vec3>) -> Self {
         debug_assert_eq!(pixels.len(), width as usize * height as usize);
+        pixels.par_iter_mut().for_each(|p| *p = finite_or_zero(*p));
         Self {
             width,
             height,
-            pixels: pixels.into_iter().map(finite_or_zero).collect(),
+            pixels,
         }
     }
 

@@ -410,6 +410,9 @@ pub fn recombine(img: Vec<Vec3>, g: &GBuffer, p: &BlurParams) -> Vec<Vec3> {
     out
 }
 
+/// Image rows per parallel block of the vertical [`runs`] (at least the blur radius).
+const VERTICAL_BLOCK_ROWS: usize = 32;
+
 /// Steps of the blur's walk from every pixel along x (`vertical` false) or y, at most `r`:
 /// forwards and backwards. A step from i to j = i +- 1 pixel is allowed if j is in the image
 /// and sees a surface and the pair has no jump along the axis (the bit of the pair's first
@@ -427,19 +430,46 @@ fn runs(g: &GBuffer, disc: &[u8], r: usize, vertical: bool) -> (Vec<u8>, Vec<u8>
             0
         }
     };
-    if vertical {
-        // Row by row, each row from the one before (along y rows are the serial axis).
-        for y in (0..h.saturating_sub(1)).rev() {
-            for i in y * w..(y + 1) * w {
-                fwd[i] = step(i, i + w, fwd[i + w]);
+    if vertical && w > 0 {
+        // Along y each row follows from its neighbour, so the rows go in blocks: every block
+        // in parallel as if the rows beyond it stopped the walks, then, block after block,
+        // its r rows nearest the next block again from that block's final row (a run
+        // reaches at most r rows, so the rows farther in are already right).
+        let block = VERTICAL_BLOCK_ROWS.max(usize::from(r));
+        fwd.par_chunks_mut(w * block)
+            .zip(back.par_chunks_mut(w * block))
+            .enumerate()
+            .for_each(|(b, (fwd, back))| {
+                let (first, rows) = (b * block * w, fwd.len() / w);
+                for y in (0..rows.saturating_sub(1)).rev() {
+                    for x in 0..w {
+                        let (at, i) = (y * w + x, first + y * w + x);
+                        fwd[at] = step(i, i + w, fwd[at + w]);
+                    }
+                }
+                for y in 1..rows {
+                    for x in 0..w {
+                        let (at, i) = (y * w + x, first + y * w + x);
+                        back[at] = step(i, i - w, back[at - w]);
+                    }
+                }
+            });
+        let fix = usize::from(r).min(block);
+        for b0 in (block..h).step_by(block).rev() {
+            for y in (b0.saturating_sub(fix)..b0).rev() {
+                for i in y * w..(y + 1) * w {
+                    fwd[i] = step(i, i + w, fwd[i + w]);
+                }
             }
         }
-        for y in 1..h {
-            for i in y * w..(y + 1) * w {
-                back[i] = step(i, i - w, back[i - w]);
+        for b0 in (block..h).step_by(block) {
+            for y in b0..(b0 + fix).min(h) {
+                for i in y * w..(y + 1) * w {
+                    back[i] = step(i, i - w, back[i - w]);
+                }
             }
         }
-    } else {
+    } else if !vertical {
         (fwd.par_chunks_mut(w.max(1)), back.par_chunks_mut(w.max(1)))
             .into_par_iter()
             .enumerate()
@@ -635,10 +665,11 @@ mod tests {
 
     /// The blur with precomputed walks equals a plain walk that tests every tap (bounds,
     /// a jump between the two pixels along the axis, pixel that sees nothing), bit for bit, on
-    /// random discontinuity maps with holes, for 1 and 3 images at once.
+    /// random discontinuity maps with holes, for 1 and 3 images at once; the image is tall
+    /// enough for the vertical walks to be found in several blocks of rows.
     #[test]
     fn the_precomputed_walks_equal_a_plain_walk() {
-        let (w, h) = (37u32, 23u32);
+        let (w, h) = (37u32, 3 * VERTICAL_BLOCK_ROWS as u32 + 7);
         let mut g = two_planes(w, h, 11);
         let n = (w * h) as usize;
         let mut rng = lgh_core::rng::Rng::new(&[5, 6]);
