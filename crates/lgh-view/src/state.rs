@@ -42,6 +42,9 @@ pub enum Action {
     ToggleHeatmap,
     /// The grid-level view: the lowest shaded level alone, the next, ... l_max, then all.
     NextLevel,
+    /// lgh's shadow estimate: the unbiased one (the default, representative VPLs as targets)
+    /// or the paper's (jittered centroids as targets), in turn.
+    ToggleEstimator,
 }
 
 /// Methods the viewer cycles through, with what they are.
@@ -53,7 +56,7 @@ pub const METHOD_CYCLE: [(lgh_render::Method, &str); 4] = [
 ];
 
 /// The keys, for the help text: (key, what it does).
-pub const CONTROLS: [(&str, &str); 18] = [
+pub const CONTROLS: [(&str, &str); 19] = [
     ("W/S", "move forward / back"),
     ("A/D", "move left / right"),
     ("Q/E", "move down / up"),
@@ -67,6 +70,10 @@ pub const CONTROLS: [(&str, &str); 18] = [
     ("K", "shadow samples 0, 1, 4"),
     ("F", "shadow filter on / off"),
     ("T", "temporal filter on / off"),
+    (
+        "U",
+        "lgh's shadow estimate: unbiased / the paper's (faster, darker behind occluders)",
+    ),
     ("- / =", "VPLs / 10, VPLs x 10"),
     ("J/L", "turn the light"),
     ("C", "show all / direct / indirect light"),
@@ -256,6 +263,17 @@ impl ViewState {
                 };
                 Some(format!("shadow filter: {:?}", s.shadows.filter))
             }
+            Action::ToggleEstimator => {
+                use lgh_render::methods::lgh::{Estimator, ShadowTarget};
+                (s.lgh.estimator, s.lgh.shadow_target) = match s.lgh.estimator {
+                    Estimator::Unbiased => (Estimator::Paper, ShadowTarget::Centroid),
+                    Estimator::Paper => (Estimator::Unbiased, ShadowTarget::Representative),
+                };
+                Some(match s.lgh.estimator {
+                    Estimator::Paper => "lgh shadow estimate: the paper's (centroids)".into(),
+                    Estimator::Unbiased => "lgh shadow estimate: unbiased".into(),
+                })
+            }
             Action::ToggleTaa => {
                 self.taa = !self.taa;
                 Some(format!("temporal filter: {}", self.taa))
@@ -321,6 +339,7 @@ pub fn action_of_key(key: &str) -> Option<Action> {
         "k" => Action::NextShadowSamples,
         "f" => Action::ToggleFilter,
         "t" => Action::ToggleTaa,
+        "u" => Action::ToggleEstimator,
         "-" => Action::Vpls(-1),
         "=" | "+" => Action::Vpls(1),
         "j" => Action::TurnLight(-1),
@@ -376,6 +395,17 @@ mod tests {
         v.apply(Action::NextInterleave);
         v.apply(Action::NextInterleave);
         assert_eq!(v.settings.tiling.interleave, Some(2));
+        assert!(v.settings.validate().is_ok());
+        // The shadow estimate: the paper's, then back; each a valid, new view.
+        use lgh_render::methods::lgh::{Estimator, ShadowTarget};
+        let before = v.version;
+        v.apply(action_of_key("u").unwrap());
+        assert_eq!(v.settings.lgh.estimator, Estimator::Paper);
+        assert_eq!(v.settings.lgh.shadow_target, ShadowTarget::Centroid);
+        assert!(v.settings.validate().is_ok() && v.version > before);
+        v.apply(action_of_key("u").unwrap());
+        assert_eq!(v.settings.lgh.estimator, Estimator::Unbiased);
+        assert_eq!(v.settings.lgh.shadow_target, ShadowTarget::Representative);
         assert!(v.settings.validate().is_ok());
     }
 
