@@ -68,8 +68,7 @@ impl Sequence {
         };
         f.set_indirect(indirect, settings.component);
         f.timings
-            .0
-            .push(("temporal".into(), start.elapsed().as_secs_f64() * 1e3));
+            .push("temporal", start.elapsed().as_secs_f64() * 1e3);
         Ok(f)
     }
 }

@@ -48,7 +48,7 @@ pub(super) struct ShadeLights {
 
 /// One hierarchy as the unbiased estimate reads it (docs/design.md, "Unbiased estimate"):
 /// its centroids by vertex for Lambda_i, the children of its lights for the draw of an S_1
-/// light, and its VPLs' flux for their colour.
+/// light, and the S_1 lights' representatives (with their VPLs' colours).
 struct Hierarchy {
     /// The representatives of its S_1 lights (by grid index).
     reps: Vec<RepSet>,
