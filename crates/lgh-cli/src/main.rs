@@ -26,6 +26,13 @@ use std::process::ExitCode;
 use clap::parser::ValueSource;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
+/// The process's allocator: jemalloc, set in `.cargo/config.toml` never to hand freed pages back
+/// to the system, so that a frame's buffers reuse the pages of the frame before instead of
+/// faulting fresh ones in (docs/performance.md, "Allocator").
+#[cfg(not(target_env = "msvc"))]
+#[global_allocator]
+static ALLOCATOR: tikv_jemallocator::Jemalloc = tikv_jemallocator::Jemalloc;
+
 /// Real-time-style global illumination with many lights, on the CPU: lighting grid hierarchy
 /// (Lin & Yuksel 2019), stochastic light culling (Tokuyoshi & Harada 2016) and a brute-force
 /// reference.

@@ -23,6 +23,21 @@ use crate::shading::shadow_pass::Targets;
 /// Random-stream tag of the shadow targets drawn after selection.
 const STREAM_TARGET: u64 = 0x162;
 
+/// Samples of the unbiased estimate whose targets are drawn together
+/// ([`ShadeLights::resolve_unbiased`]).
+const TARGET_BATCH: usize = 16;
+
+/// A sample of the unbiased estimate on its way to its target: the grid light its walk has
+/// reached (`None` for a VPL shaded as S_0), in hierarchy `hierarchy`.
+struct Pending<'a> {
+    sample: &'a mut ShadowSample,
+    pixel: usize,
+    rng: Rng,
+    hierarchy: usize,
+    node: Option<usize>,
+    walking: bool,
+}
+
 /// The lights a pixel may see, structure-of-arrays, each with its level's radius r_l,
 /// blending role and reach (2 r_l, or infinite for the top level).
 #[derive(Default)]
@@ -273,107 +288,170 @@ impl ShadeLights {
         eps2: f32,
     ) {
         let w = g.width as usize;
+        if !self.hierarchies.is_empty() {
+            let (k, slots) = (reservoirs.k(), reservoirs.slots());
+            reservoirs.groups_mut(1).for_each(|(y, row)| {
+                let mut batch = Vec::with_capacity(TARGET_BATCH);
+                for (x, pixel) in row.chunks_mut(slots).enumerate() {
+                    let i = y * w + x;
+                    if !g.is_hit(i) {
+                        continue;
+                    }
+                    for (r, res) in pixel[..k].iter_mut().enumerate() {
+                        if let Some(sample) = res.sample.as_mut() {
+                            let rng = Rng::new(&[seed, i as u64, STREAM_TARGET, r as u64]);
+                            batch.push(self.pending(sample, i, rng));
+                            if batch.len() == TARGET_BATCH {
+                                self.resolve_unbiased(&mut batch, g, eps2);
+                            }
+                        }
+                    }
+                }
+                self.resolve_unbiased(&mut batch, g, eps2);
+            });
+            return;
+        }
         let layout = reservoirs.layout();
         reservoirs.groups_mut(1).for_each(|(y, row)| {
             for x in 0..w {
                 let i = y * w + x;
                 if g.is_hit(i) {
-                    self.resolve_pixel(layout.pixel_mut(row, x), g, i, seed, eps2);
+                    let mut rng = Rng::new(&[seed, i as u64, STREAM_TARGET]);
+                    for r in layout.pixel_mut(row, x) {
+                        self.resolve_representative(r, g.position[i], g.normal[i], &mut rng, eps2);
+                    }
                 }
             }
         });
     }
 
-    /// [`ShadeLights::resolve_representatives`] for the reservoirs of pixel `i`.
-    fn resolve_pixel(
+    /// Draws the target of a sample of the paper's estimate among its light's
+    /// representatives, in proportion to their contributions at the pixel at `xp` with
+    /// normal `nx`.
+    fn resolve_representative(
         &self,
-        reservoirs: &mut [Reservoir<ShadowSample>],
-        g: &GBuffer,
-        i: usize,
-        seed: u64,
-        eps2: f32,
-    ) {
-        let (xp, nx) = (g.position[i], g.normal[i]);
-        let mut rng = Rng::new(&[seed, i as u64, STREAM_TARGET]);
-        if !self.hierarchies.is_empty() {
-            for r in reservoirs {
-                if let Some(sample) = r.sample.as_mut() {
-                    self.resolve_unbiased(sample, xp, nx, &mut rng, eps2);
-                }
-            }
-            return;
-        }
-        for r in reservoirs {
-            let Some(j) = r.sample.map(|s| s.light as usize) else {
-                continue;
-            };
-            // The representatives' contributions (an empty slot has n_q = 0).
-            let weights = self.reps[j].weights(xp, nx, eps2);
-            let total: f32 = weights.iter().sum();
-            if total <= 0.0 {
-                // None of the VPLs the light stands for lights the pixel: its contribution
-                // is an artefact of the mean normal, with no visibility to estimate.
-                // Dropped, as a zero weight drops it at candidate time.
-                r.sample = None;
-                continue;
-            }
-            let pick = pick_weighted(&weights, total, rng.next_f32());
-            if let Some(sample) = r.sample.as_mut() {
-                (sample.q, sample.n) = self.reps[j].get(pick);
-            }
-        }
-    }
-
-    /// Draws the target of a sample of the unbiased estimate (docs/design.md, "Unbiased
-    /// estimate"): from its light j (a VPL, or grid light g of some level) an S_1 light below
-    /// it in proportion to its share ([`Descent`]; j itself for S_1 and VPLs), and one of
-    /// that light's representatives i in proportion to its unshadowed contribution rho_i at
-    /// the pixel; the ray goes to VPL i. The sample's gain S_k / U_k per unit visibility is
-    /// (sum rho / SLOTS) / (G_j Lambda_i) in the colour of VPL i: the ratio of the VPL's
-    /// share-weighted contribution, as a sample of the VPLs that j stands for, to j's own
-    /// contribution A_j = B_l I_j G_j / pi. Here the gain gets the colour and sum rho /
-    /// SLOTS; G_j and Lambda_i, which only a visible sample needs, divide it in
-    /// [`ShadeLights::unbiased_gain`] once the ray has found the target visible. The gain is
-    /// zero (no ray) if no representative lights the pixel (U still counts the light: it
-    /// is part of A).
-    fn resolve_unbiased(
-        &self,
-        sample: &mut ShadowSample,
+        r: &mut Reservoir<ShadowSample>,
         xp: Vec3,
         nx: Vec3,
         rng: &mut Rng,
         eps2: f32,
     ) {
-        let j = sample.light as usize;
-        let h = self.hierarchy_of(j);
-        // No ray unless a VPL below j lights the pixel (U still counts j).
-        sample.gain = Vec3::ZERO;
-        // The VPL the ray goes to, as (position, normal, colour relative to j's), and sum
-        // rho / SLOTS. The colour of j is that of its contribution f (a scalar multiple of
-        // its intensity), already at hand: reading I_j would be one more wait on memory.
-        let (q, nq, colour, mean_rho) = if j < h.grid_base {
-            // A VPL shaded as S_0 stands for itself, in its own colour.
-            let (q, nq) = (self.position[j], self.normal[j]);
-            let rho = representative_weight(xp, nx, q, nq, eps2);
-            (q, nq, Vec3::ONE, rho)
-        } else {
-            let u = h.descent.to_level_one(j - h.grid_base, || rng.next_f32());
-            let reps = &h.reps[u];
-            let weights = reps.weights(xp, nx, eps2);
-            let total: f32 = weights.iter().sum();
-            if total <= 0.0 {
-                return;
-            }
-            let pick = pick_weighted(&weights, total, rng.next_f32());
-            let (q, nq) = reps.get(pick);
-            let colour = relative_colour(reps.colour(pick), chroma(sample.f));
-            (q, nq, colour, total / SLOTS as f32)
+        let Some(j) = r.sample.map(|s| s.light as usize) else {
+            return;
         };
-        if mean_rho <= 0.0 {
+        // The representatives' contributions (an empty slot has n_q = 0).
+        let weights = self.reps[j].weights(xp, nx, eps2);
+        let total: f32 = weights.iter().sum();
+        if total <= 0.0 {
+            // None of the VPLs the light stands for lights the pixel: its contribution
+            // is an artefact of the mean normal, with no visibility to estimate.
+            // Dropped, as a zero weight drops it at candidate time.
+            r.sample = None;
             return;
         }
-        (sample.q, sample.n) = (q, nq);
-        sample.gain = colour * mean_rho;
+        let pick = pick_weighted(&weights, total, rng.next_f32());
+        if let Some(sample) = r.sample.as_mut() {
+            (sample.q, sample.n) = self.reps[j].get(pick);
+        }
+    }
+
+    /// A sample of pixel `pixel` whose unbiased target is still to be drawn: its hierarchy,
+    /// and the grid light its walk starts from (`None` for a VPL shaded as S_0).
+    fn pending<'a>(&self, sample: &'a mut ShadowSample, pixel: usize, rng: Rng) -> Pending<'a> {
+        let j = sample.light as usize;
+        let hierarchy = self.hierarchies.partition_point(|h| h.first <= j) - 1;
+        let base = self.hierarchies[hierarchy].grid_base;
+        // No ray unless a VPL below j lights the pixel (U still counts j).
+        sample.gain = Vec3::ZERO;
+        Pending {
+            sample,
+            pixel,
+            rng,
+            hierarchy,
+            node: j.checked_sub(base),
+            walking: j >= base,
+        }
+    }
+
+    /// Draws the targets of a batch of samples of the unbiased estimate (docs/design.md,
+    /// "Unbiased estimate") and empties the batch: from each sample's light j (a VPL, or grid
+    /// light g of some level) an S_1 light below it in proportion to its share
+    /// ([`Descent`]; j itself for S_1 and VPLs), and one of that light's representatives i
+    /// in proportion to its unshadowed contribution rho_i at the pixel; the ray goes to VPL
+    /// i. The sample's gain S_k / U_k per unit visibility is (sum rho / SLOTS) /
+    /// (G_j Lambda_i) in the colour of VPL i: the ratio of the VPL's share-weighted
+    /// contribution, as a sample of the VPLs that j stands for, to j's own contribution
+    /// A_j = B_l I_j G_j / pi. Here the gain gets the colour and sum rho / SLOTS; G_j and
+    /// Lambda_i, which only a visible sample needs, divide it in
+    /// [`ShadeLights::unbiased_gain`] once the ray has found the target visible. The gain is
+    /// zero (no ray) if no representative lights the pixel (U still counts the light: it
+    /// is part of A).
+    ///
+    /// The batch goes through each step together, so that its samples' reads of memory
+    /// (the children of each level, then the representatives) are independent loads in
+    /// flight at once, not one sample's chain of cache misses after another's (docs/design.md,
+    /// "Unbiased estimate").
+    fn resolve_unbiased(&self, batch: &mut Vec<Pending>, g: &GBuffer, eps2: f32) {
+        // The walks, one level a round for every sample still walking.
+        loop {
+            let mut moved = false;
+            for p in batch.iter_mut().filter(|p| p.walking) {
+                let descent = &self.hierarchies[p.hierarchy].descent;
+                let u = p.rng.next_f32();
+                match p.node.and_then(|node| descent.child(node, u)) {
+                    Some(c) => (p.node, moved) = (Some(c), true),
+                    None => p.walking = false,
+                }
+            }
+            if !moved {
+                break;
+            }
+        }
+        // Every representative set the batch will weigh, read once ahead: six cache lines of
+        // positions and normals and three of colours each.
+        let mut touch = 0.0;
+        for p in batch.iter() {
+            if let Some(u) = p.node {
+                let reps = &self.hierarchies[p.hierarchy].reps[u];
+                for a in 0..3 {
+                    touch += reps.position[a][0] + reps.normal[a][0] + reps.colour[a][0];
+                }
+            }
+        }
+        std::hint::black_box(touch);
+        for p in batch.drain(..) {
+            let (xp, nx) = (g.position[p.pixel], g.normal[p.pixel]);
+            let sample = p.sample;
+            let (q, nq, colour, mean_rho) = match p.node {
+                None => {
+                    // A VPL shaded as S_0 stands for itself, in its own colour.
+                    let j = sample.light as usize;
+                    let (q, nq) = (self.position[j], self.normal[j]);
+                    let rho = representative_weight(xp, nx, q, nq, eps2);
+                    (q, nq, Vec3::ONE, rho)
+                }
+                Some(u) => {
+                    let mut rng = p.rng;
+                    let reps = &self.hierarchies[p.hierarchy].reps[u];
+                    let weights = reps.weights(xp, nx, eps2);
+                    let total: f32 = weights.iter().sum();
+                    if total <= 0.0 {
+                        continue;
+                    }
+                    let pick = pick_weighted(&weights, total, rng.next_f32());
+                    let (q, nq) = reps.get(pick);
+                    // The colour of j is that of its contribution f (a scalar multiple of its
+                    // intensity), already at hand: reading I_j would be one more wait on
+                    // memory.
+                    let colour = relative_colour(reps.colour(pick), chroma(sample.f));
+                    (q, nq, colour, total / SLOTS as f32)
+                }
+            };
+            if mean_rho > 0.0 {
+                (sample.q, sample.n) = (q, nq);
+                sample.gain = colour * mean_rho;
+            }
+        }
     }
 
     /// The hierarchy light `j` belongs to.
