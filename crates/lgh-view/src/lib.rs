@@ -80,12 +80,18 @@ pub struct ViewArgs {
 /// render defaults measured 3.1 fps where this gave 6.0; docs/performance.md).
 pub const INTERACTIVE_ALPHA: f32 = 1.0;
 
+/// The viewer's a-trous passes when `--filter-passes` is not given: one fewer than the
+/// render default, 3.4 ms less a frame at 640x360. With the temporal filter on, FLIP of a
+/// 12-frame sequence at the viewer's settings rose by 0.2-0.9% on five scenes, where 3
+/// passes cost 1-3% (docs/performance.md, "The viewer frame (2026-12-03, fifth session)").
+pub const INTERACTIVE_FILTER_PASSES: u32 = 4;
+
 impl ViewArgs {
     /// Starts at interactive settings where the command line leaves them (`given(id)` tells
     /// whether the flag of clap id `id` was given): alpha [`INTERACTIVE_ALPHA`] and S_1 the
-    /// lowest level shaded, one hierarchy (no normal bins), and for lgh 4 x 4 interleaving
-    /// ([`lgh::INTERACTIVE_INTERLEAVE`]), instead of the render defaults, which favour
-    /// accuracy.
+    /// lowest level shaded, one hierarchy (no normal bins), [`INTERACTIVE_FILTER_PASSES`]
+    /// a-trous passes, and for lgh 4 x 4 interleaving ([`lgh::INTERACTIVE_INTERLEAVE`]),
+    /// instead of the render defaults, which favour accuracy.
     pub fn use_interactive_defaults(&mut self, given: impl Fn(&str) -> bool) {
         let lgh_method = [lgh::LGH, lgh::LGH_UNSHADOWED].contains(&self.settings.method);
         if !given("interleave") && lgh_method {
@@ -99,6 +105,9 @@ impl ViewArgs {
         }
         if !given("normal_bins") {
             self.settings.lgh.normal_bins = false;
+        }
+        if !given("filter_passes") {
+            self.settings.shadows.filter_passes = INTERACTIVE_FILTER_PASSES;
         }
     }
 

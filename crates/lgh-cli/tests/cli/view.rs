@@ -4,7 +4,7 @@ use super::{assert_error, lgh, s, temp_dir};
 
 const SMALL: [&str; 6] = ["--size", "160x90", "--vpls", "5000", "--frames", "6"];
 
-/// The viewer starts at interactive settings (alpha 1, S_1 first) unless the command line
+/// The viewer starts at interactive settings (alpha 1, S_1 first, 4 a-trous passes) unless the command line
 /// gives them; a flag given keeps its value, the other still gets the viewer's.
 #[test]
 fn view_starts_at_interactive_settings_unless_given() {
@@ -26,6 +26,9 @@ fn view_starts_at_interactive_settings_unless_given() {
         (
             lgh["alpha"].as_f64().unwrap(),
             lgh["start_level"].as_u64().unwrap(),
+            json["settings"]["shadows"]["filter_passes"]
+                .as_u64()
+                .unwrap(),
         )
     };
     // --help lists the keys after the flags.
@@ -33,9 +36,10 @@ fn view_starts_at_interactive_settings_unless_given() {
     for key in ["Controls", "W/S", "overdraw heat map", "Esc"] {
         assert!(help.contains(key), "{key}: {help}");
     }
-    assert_eq!(settings(&[]), (1.0, 1));
-    assert_eq!(settings(&["--alpha", "4"]), (4.0, 1));
-    assert_eq!(settings(&["--start-level", "0"]), (1.0, 0));
+    assert_eq!(settings(&[]), (1.0, 1, 4));
+    assert_eq!(settings(&["--alpha", "4"]), (4.0, 1, 4));
+    assert_eq!(settings(&["--start-level", "0"]), (1.0, 0, 4));
+    assert_eq!(settings(&["--filter-passes", "5"]), (1.0, 1, 5));
 }
 
 #[test]
