@@ -24,7 +24,6 @@ use glam::{UVec3, Vec3};
 
 use rayon::prelude::*;
 
-use super::splat::locate;
 use super::{GridGeometry, LightingGrid};
 use crate::blending::{LevelRole, blend};
 
@@ -84,6 +83,24 @@ pub struct Partition {
     geometry: GridGeometry,
     /// Per level l >= 1 (index l - 1).
     centroids: Vec<Centroids>,
+    /// Per shaded level, `lowest..=l_max`: its constants, computed once instead of per call
+    /// of [`Partition::blend_total`] (which runs once per visible shadow sample).
+    shaded: Vec<LevelConstants>,
+}
+
+/// One shaded level's constants for [`Partition::blend_total`].
+#[derive(Clone, Copy, Debug)]
+struct LevelConstants {
+    l: u32,
+    role: LevelRole,
+    /// h_l and 1 / h_l.
+    h: f32,
+    inv_h: f32,
+    /// r_l = alpha h_l and 1 / r_l.
+    r: f32,
+    inv_r: f32,
+    /// Cells per axis.
+    cells: u32,
 }
 
 /// The centroids of one level's lights by vertex.
@@ -136,10 +153,25 @@ impl Partition {
                 }
             })
             .collect();
+        let shaded = (levels.lowest..=geometry.l_max)
+            .map(|l| {
+                let (h, r) = (geometry.cell_size(l), geometry.radius(l, levels.alpha));
+                LevelConstants {
+                    l,
+                    role: LevelRole::of(l, levels.lowest, geometry.l_max),
+                    h,
+                    inv_h: 1.0 / h,
+                    r,
+                    inv_r: 1.0 / r,
+                    cells: geometry.cells_per_axis(l),
+                }
+            })
+            .collect();
         Self {
             levels,
             geometry,
             centroids,
+            shaded,
         }
     }
 
@@ -167,20 +199,29 @@ impl Partition {
     /// Lambda_i(x) of the module docs for the input light at `p` and the shading point `x`.
     #[must_use]
     pub fn blend_total(&self, x: Vec3, p: Vec3) -> f32 {
-        let geom = &self.geometry;
-        let (lowest, alpha) = (self.levels.lowest, self.levels.alpha);
-        let top = geom.l_max;
+        let origin = self.geometry.origin;
         let mut total = 0.0;
-        for l in lowest..=top {
-            let role = LevelRole::of(l, lowest, top);
-            let r = geom.radius(l, alpha);
+        for &LevelConstants {
+            l,
+            role,
+            h,
+            inv_h,
+            r,
+            inv_r,
+            cells,
+        } in &self.shaded
+        {
             if l == 0 {
                 total += blend(role, (x - p).length(), r);
                 continue;
             }
-            let h = geom.cell_size(l);
-            let (c, f) = locate(p, geom.origin, h, geom.cells_per_axis(l));
-            let centre = geom.origin + (c.as_vec3() + Vec3::splat(0.5)) * h;
+            // `locate` with 1 / h_l (truncation after the clamp is the floor).
+            let u = (p - origin) * inv_h;
+            let c = u
+                .clamp(Vec3::ZERO, Vec3::splat((cells - 1) as f32))
+                .as_uvec3();
+            let f = (u - c.as_vec3()).clamp(Vec3::ZERO, Vec3::ONE);
+            let centre = origin + (c.as_vec3() + Vec3::splat(0.5)) * h;
             // Where B_l is the same at every distance the level's centroids can have, the
             // level adds that value times the weights, which sum to one (every vertex around
             // a light of non-zero intensity has a light).
@@ -205,7 +246,7 @@ impl Partition {
                 Some(Centroids::Dense(table)) => {
                     // The cell's corners are 8 fixed offsets from its first (c + 1 <= r,
                     // inside the table).
-                    let side = geom.cells_per_axis(l) as usize + 1;
+                    let side = cells as usize + 1;
                     let base = (c.z as usize * side + c.y as usize) * side + c.x as usize;
                     let plane = side * side;
                     let offsets = [
@@ -236,7 +277,6 @@ impl Partition {
                     }
                 }
             }
-            let inv_r = 1.0 / r;
             let (rise_off, fall_off) = match role {
                 LevelRole::Only => (1.0, 1.0),
                 LevelRole::Lowest => (1.0, 0.0),
