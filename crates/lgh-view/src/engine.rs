@@ -12,6 +12,7 @@ use lgh_render::accumulate::frame_settings;
 use lgh_render::image::heat::{HEAT_EXPOSURE, heat_map};
 use lgh_render::image::tonemap::tonemap_pixel;
 use lgh_render::methods::lgh::LghStats;
+use lgh_render::passes::par_copy_into;
 use lgh_render::sequence::Sequence;
 use lgh_render::{FrameMemory, Image, RenderError, Silent, World, render_frame_with};
 use lgh_scene::{Light, Scene};
@@ -115,7 +116,7 @@ impl FrameLoop {
         let display_start = Instant::now();
         let pixels = &frame.image.pixels;
         if self.accumulated == 0 || self.sum.len() != pixels.len() {
-            self.sum.clone_from(pixels);
+            par_copy_into(&mut self.sum, pixels);
             self.accumulated = 1;
         } else {
             self.sum
@@ -125,7 +126,7 @@ impl FrameLoop {
             self.accumulated += 1;
         }
         let mut mean: Vec<Vec3> = if self.accumulated == 1 {
-            self.sum.clone()
+            self.sum.par_iter().copied().collect()
         } else {
             let inv = 1.0 / self.accumulated as f32;
             self.sum.par_iter().map(|s| *s * inv).collect()

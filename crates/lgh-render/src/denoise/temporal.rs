@@ -24,6 +24,7 @@ use lgh_scene::camera::CameraFrame;
 use rayon::prelude::*;
 
 use crate::passes::gbuffer::GBuffer;
+use crate::passes::par_copy_into;
 
 /// What is accumulated over frames.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -221,9 +222,9 @@ impl TemporalFilter {
         match &mut self.history {
             Some(h) => {
                 (h.frame, h.width, h.height) = (frame, g.width, g.height);
-                h.depth.clone_from(&g.depth);
-                h.normal.clone_from(&g.normal);
-                h.value.clone_from(&out);
+                par_copy_into(&mut h.depth, &g.depth);
+                par_copy_into(&mut h.normal, &g.normal);
+                par_copy_into(&mut h.value, &out);
             }
             None => self.history = Some(History::new(frame, g, out.clone())),
         }

@@ -18,6 +18,13 @@ pub fn par_filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
     (0..n).into_par_iter().map(|_| value).collect()
 }
 
+/// Makes `dst` a copy of `src`, written in parallel into `dst`'s own memory (`clone_from` of
+/// an image-sized buffer is one thread's memcpy while the others wait).
+pub fn par_copy_into<T: Copy + Send + Sync>(dst: &mut Vec<T>, src: &[T]) {
+    dst.clear();
+    dst.par_extend(src.par_iter().copied());
+}
+
 /// Runs `f` for every pixel index of a `width` x `len / width` image, rows in parallel, and
 /// reports one unit of progress per row. Each pixel's value depends only on its index, so the
 /// result is the same whatever the thread count.

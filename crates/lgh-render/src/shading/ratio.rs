@@ -91,10 +91,12 @@ pub fn ratio_of(s: &[Vec3], u: &[Vec3], max: f32) -> Vec<Vec3> {
         .collect()
 }
 
-/// indirect = albedo / pi x A x ratio per pixel.
+/// indirect = albedo / pi x A x ratio per pixel (in parallel: the viewer composites twice a
+/// frame, once more after the temporal filter).
 #[must_use]
 pub fn composite(g: &GBuffer, a: &[Vec3], ratio: &[Vec3]) -> Vec<Vec3> {
     (0..g.len())
+        .into_par_iter()
         .map(|i| g.albedo[i] * FRAC_1_PI * a[i] * ratio[i])
         .collect()
 }
