@@ -76,9 +76,11 @@ pub struct ViewArgs {
     pub threads: usize,
 }
 
-/// The viewer's alpha when `--alpha` is not given: the paper's 1, for interactive rates (the
-/// render defaults measured 3.1 fps where this gave 6.0; docs/performance.md).
-pub const INTERACTIVE_ALPHA: f32 = 1.0;
+/// The viewer's alpha when `--alpha` is not given: 1.5, for interactive rates (the render
+/// defaults' 3 measured 3.1 fps where the paper's 1 gave 6.0). Against the paper's 1 it
+/// costs 4% of the frame and lowers FLIP by a quarter; at 1 the image is up to 12% too dark
+/// (Sponza, k = 1; docs/performance.md, "The viewer frame (2026-12-03, fifth session)").
+pub const INTERACTIVE_ALPHA: f32 = 1.5;
 
 /// The viewer's a-trous passes when `--filter-passes` is not given: one fewer than the
 /// render default, 3.4 ms less a frame at 640x360. With the temporal filter on, FLIP of a

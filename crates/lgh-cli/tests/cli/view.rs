@@ -4,8 +4,9 @@ use super::{assert_error, lgh, s, temp_dir};
 
 const SMALL: [&str; 6] = ["--size", "160x90", "--vpls", "5000", "--frames", "6"];
 
-/// The viewer starts at interactive settings (alpha 1, S_1 first, 4 a-trous passes) unless the command line
-/// gives them; a flag given keeps its value, the other still gets the viewer's.
+/// The viewer starts at interactive settings (alpha 1.5, S_1 first, 4 a-trous passes) unless
+/// the command line gives them; a flag given keeps its value, the others still get the
+/// viewer's.
 #[test]
 fn view_starts_at_interactive_settings_unless_given() {
     let d = temp_dir("view-defaults");
@@ -36,10 +37,10 @@ fn view_starts_at_interactive_settings_unless_given() {
     for key in ["Controls", "W/S", "overdraw heat map", "Esc"] {
         assert!(help.contains(key), "{key}: {help}");
     }
-    assert_eq!(settings(&[]), (1.0, 1, 4));
+    assert_eq!(settings(&[]), (1.5, 1, 4));
     assert_eq!(settings(&["--alpha", "4"]), (4.0, 1, 4));
-    assert_eq!(settings(&["--start-level", "0"]), (1.0, 0, 4));
-    assert_eq!(settings(&["--filter-passes", "5"]), (1.0, 1, 5));
+    assert_eq!(settings(&["--start-level", "0"]), (1.5, 0, 4));
+    assert_eq!(settings(&["--filter-passes", "5"]), (1.5, 1, 5));
 }
 
 #[test]
