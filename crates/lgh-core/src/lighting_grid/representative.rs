@@ -117,6 +117,30 @@ pub fn representatives(
     reps
 }
 
+/// The S_1 lights' representatives alone, drawn as [`representatives`] draws them (same
+/// seed, same slots), each light's [`SLOTS`] handed to `make` as soon as they are drawn, in
+/// parallel; the results in grid order of the S_1 lights. No table of every level's slots
+/// is filled and read back.
+pub fn s1_representatives<T: Send>(
+    grid: &LightingGrid,
+    lights: &InputLights,
+    seed: u64,
+    make: impl Fn(&[u32; SLOTS]) -> T + Sync,
+) -> Vec<T> {
+    let rows = super::lookup::VertexRows::new(grid);
+    let grid = Lookup::new(grid, &rows);
+    let cells = CellRuns::new(&grid, lights);
+    grid.grid
+        .level_range(1)
+        .into_par_iter()
+        .map_init(Vec::new, |scratch, j| {
+            let mut slots = [NONE; SLOTS];
+            cells.draw_s1(&grid, j, seed, scratch, &mut slots);
+            make(&slots)
+        })
+        .collect()
+}
+
 /// The input lights sorted by their level-1 cell, in runs of one cell each, with a table of
 /// where each cell row (y, z) starts among the runs: the lights around a vertex are then
 /// found by one table read and a search within a row, as [`Lookup::find`] finds vertices.
@@ -366,6 +390,31 @@ mod tests {
         let d = (p - geom.vertex_position(l, v)) / geom.cell_size(l);
         let t = (Vec3::ONE - d.abs()).max(Vec3::ZERO);
         f64::from(t.x * t.y * t.z)
+    }
+
+    /// The S_1-only draw hands out exactly the slots of the full draw, light by light, for
+    /// several seeds (the unbiased estimate uses the former, the paper's the latter).
+    #[test]
+    fn s1_draw_equals_the_full_draws_s1_slots() {
+        let (p, i) = lights();
+        let input = InputLights {
+            positions: &p,
+            intensity: &i,
+            normals: None,
+        };
+        let (grid, _) =
+            LightingGrid::build(&input, LevelCount::Fixed(3), Construction::Restrict).unwrap();
+        let s1 = grid.level_range(1);
+        assert!(!s1.is_empty());
+        for seed in 0..8 {
+            let full = representatives(&grid, &input, 1, Construction::Restrict, seed);
+            let alone = s1_representatives(&grid, &input, seed, |s| *s);
+            assert_eq!(alone.len(), s1.len());
+            for (k, slots) in alone.iter().enumerate() {
+                let j = s1.start + k;
+                assert_eq!(&full[SLOTS * j..SLOTS * (j + 1)], slots, "light {j}, seed {seed}");
+            }
+        }
     }
 
     /// Each slot of a grid light picks input light i with probability equal to its share of

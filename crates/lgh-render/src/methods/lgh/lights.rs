@@ -8,7 +8,7 @@ use lgh_core::color::luminance;
 use lgh_core::lighting_grid::descent::Descent;
 use lgh_core::lighting_grid::lookup::{VertexLookup, VertexRows};
 use lgh_core::lighting_grid::partition::{Partition, ShadedLevels};
-use lgh_core::lighting_grid::representative::{NONE, SLOTS, representatives};
+use lgh_core::lighting_grid::representative::{NONE, SLOTS, representatives, s1_representatives};
 use lgh_core::lighting_grid::{Construction, LightingGrid};
 use lgh_core::reservoir::Reservoir;
 use lgh_core::rng::Rng;
@@ -238,8 +238,8 @@ impl ShadeLights {
         );
     }
 
-    /// Keeps what the unbiased estimate needs of `grid` (built from `vpls` by `construction`,
-    /// restriction or all-scatter), whose lights [`ShadeLights::add_hierarchy`] added from
+    /// Keeps what the unbiased estimate needs of `grid` (built from `vpls` by restriction or
+    /// all-scatter), whose lights [`ShadeLights::add_hierarchy`] added from
     /// index `first` with levels `levels`: the representatives of its S_1 lights (drawn with
     /// `seed`), the children of its coarser lights and its centroids by vertex.
     pub(super) fn add_unbiased(
@@ -247,19 +247,11 @@ impl ShadeLights {
         grid: &LightingGrid,
         vpls: &Vpls,
         levels: ShadedLevels,
-        construction: Construction,
         seed: u64,
         first: usize,
     ) {
         // S_1 only: the draw below a coarser light is made afresh per sample.
-        let input = vpls.as_input();
-        let slots = representatives(grid, &input, grid.l_max() + 1, construction, seed);
-        let s1 = grid.level_range(1);
-        let slots = &slots[SLOTS * s1.start..SLOTS * s1.end];
-        let reps = slots
-            .par_chunks(SLOTS)
-            .map(|s| RepSet::of(s, vpls))
-            .collect();
+        let reps = s1_representatives(grid, &vpls.as_input(), seed, |s| RepSet::of(s, vpls));
         let rows = VertexRows::new(grid);
         let vpl_lights = if levels.lowest == 0 { vpls.len() } else { 0 };
         self.hierarchies.push(Hierarchy {

@@ -222,7 +222,7 @@ pub fn render_lgh(
                     lowest,
                     alpha: settings.alpha,
                 };
-                lights.add_unbiased(grid, group, levels, settings.construction, seed, first);
+                lights.add_unbiased(grid, group, levels, seed, first);
             } else {
                 lights.add_representatives(
                     grid,
