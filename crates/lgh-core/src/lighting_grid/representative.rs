@@ -412,7 +412,11 @@ mod tests {
             assert_eq!(alone.len(), s1.len());
             for (k, slots) in alone.iter().enumerate() {
                 let j = s1.start + k;
-                assert_eq!(&full[SLOTS * j..SLOTS * (j + 1)], slots, "light {j}, seed {seed}");
+                assert_eq!(
+                    &full[SLOTS * j..SLOTS * (j + 1)],
+                    slots,
+                    "light {j}, seed {seed}"
+                );
             }
         }
     }
