@@ -351,7 +351,7 @@ impl ShadeLights {
     /// and the grid light its walk starts from (`None` for a VPL shaded as S_0).
     fn pending<'a>(&self, sample: &'a mut ShadowSample, pixel: usize, rng: Rng) -> Pending<'a> {
         let j = sample.light as usize;
-        let hierarchy = self.hierarchies.partition_point(|h| h.first <= j) - 1;
+        let hierarchy = self.hierarchy_index(j);
         let base = self.hierarchies[hierarchy].grid_base;
         // No ray unless a VPL below j lights the pixel (U still counts j).
         sample.gain = Vec3::ZERO;
@@ -446,9 +446,14 @@ impl ShadeLights {
         }
     }
 
+    /// The index of the hierarchy light `j` belongs to.
+    fn hierarchy_index(&self, j: usize) -> usize {
+        self.hierarchies.partition_point(|h| h.first <= j) - 1
+    }
+
     /// The hierarchy light `j` belongs to.
     fn hierarchy_of(&self, j: usize) -> &Hierarchy {
-        &self.hierarchies[self.hierarchies.partition_point(|h| h.first <= j) - 1]
+        &self.hierarchies[self.hierarchy_index(j)]
     }
 
     /// The gain of a visible sample of the unbiased estimate at the pixel at `xp` with
