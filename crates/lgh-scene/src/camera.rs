@@ -77,6 +77,41 @@ impl CameraFrame {
             .normalize()
     }
 
+    /// The image-plane rectangle [x0, y0, x1, y1] (pixels, not clipped to the image) of the
+    /// sphere (`c`, `r`): the projections of its silhouette's tangent lines, which bound the
+    /// projection of every point of the ball exactly (a box of the ball's bounding cube is up
+    /// to about twice as wide). `None` if the ball reaches the plane of the eye (then its
+    /// projection is unbounded) or the numbers are not finite.
+    ///
+    /// Per image axis a (right or up) the ball's points x/z lie between the slopes of the
+    /// two lines through the eye tangent to the circle of the ball in the plane of a and the
+    /// viewing direction: m = (c_a c_z +- r sqrt(c_a^2 + c_z^2 - r^2)) / (c_z^2 - r^2), with
+    /// c_a, c_z the centre's offset from the eye along a and along the viewing direction.
+    #[must_use]
+    pub fn sphere_bounds(&self, c: Vec3, r: f32) -> Option<[f32; 4]> {
+        let d = c - self.origin;
+        let cz = d.dot(self.forward);
+        let (cx, cy) = (d.dot(self.right), d.dot(self.up));
+        let den = cz * cz - r * r;
+        // Relative margin for the rounding of the slopes (a few f32 epsilons of the terms).
+        const MARGIN: f32 = 1e-5;
+        if !(cz > r && den > MARGIN * cz * cz && cx.is_finite() && cy.is_finite()) {
+            return None;
+        }
+        let slopes = |ca: f32| {
+            let root = r * (ca * ca + den).sqrt();
+            let mid = ca * cz;
+            let slack = MARGIN * (mid.abs() + root) + f32::MIN_POSITIVE;
+            ((mid - root - slack) / den, (mid + root + slack) / den)
+        };
+        let (x_lo, x_hi) = slopes(cx);
+        let (y_lo, y_hi) = slopes(cy);
+        let px = |m: f32| (m / self.scale.x + 1.0) * 0.5 * self.size.x;
+        let py = |m: f32| (1.0 - m / self.scale.y) * 0.5 * self.size.y;
+        let rect = [px(x_lo), py(y_hi), px(x_hi), py(y_lo)];
+        rect.iter().all(|v| v.is_finite()).then_some(rect)
+    }
+
     /// Projects a world point to image coordinates (pixels) and its depth along the viewing
     /// direction; `None` behind the camera.
     #[must_use]
@@ -117,5 +152,82 @@ mod tests {
         // +x is to the right when looking down -z with +y up.
         let (r, _) = f.project(Vec3::new(2.0, 2.0, 0.0)).unwrap();
         assert!(r.x > 100.0);
+    }
+
+    /// A small deterministic generator for the tests (xorshift), uniform in [0, 1).
+    fn uniforms(seed: u64) -> impl FnMut() -> f32 {
+        let mut x = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+        move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    /// The sphere's rectangle holds the projection of every point of the ball (sampled on
+    /// the surface and inside), and is tight: the samples reach within 2% of each side
+    /// (balls at least their radius away from the plane of the eye).
+    /// Spheres that reach the plane of the eye have none.
+    #[test]
+    fn sphere_bounds_hold_the_ball_tightly() {
+        let mut u = uniforms(7);
+        let mut checked = 0;
+        for case in 0..300 {
+            let mut v = |s: f32| Vec3::new(u() - 0.5, u() - 0.5, u() - 0.5) * s;
+            let (p0, p1, up, c0) = (v(10.0), v(10.0), v(0.5), v(6.0));
+            let cam = Camera {
+                position: p0,
+                look_at: p1,
+                up: Vec3::Y + up,
+                fov_y_degrees: 20.0 + 120.0 * u(),
+            };
+            if !cam.is_valid() {
+                continue;
+            }
+            let f = cam.frame(320, 180);
+            let c = f.origin + f.forward * (0.2 + 8.0 * u()) + c0;
+            let r = 0.01 + 3.0 * u() * u();
+            let cz = (c - f.origin).dot(f.forward);
+            let Some([x0, y0, x1, y1]) = f.sphere_bounds(c, r) else {
+                assert!(
+                    cz <= r * 1.001,
+                    "case {case}: no bounds for a ball in front"
+                );
+                continue;
+            };
+            assert!(
+                cz > r,
+                "case {case}: bounds for a ball that reaches the eye"
+            );
+            let (mut lo, mut hi) = (Vec2::splat(f32::MAX), Vec2::splat(f32::MIN));
+            for k in 0..4000 {
+                // A uniform direction, on the surface for even k and inside for odd k.
+                let z = 2.0 * u() - 1.0;
+                let phi = std::f32::consts::TAU * u();
+                let s = (1.0 - z * z).max(0.0).sqrt();
+                let dir = Vec3::new(s * phi.cos(), s * phi.sin(), z);
+                let p = c + dir * if k % 2 == 0 { r } else { r * u() };
+                let (q, _) = f.project(p).unwrap();
+                let tol = 1e-3 * (1.0 + q.abs().max_element());
+                assert!(
+                    q.x >= x0 - tol && q.x <= x1 + tol && q.y >= y0 - tol && q.y <= y1 + tol,
+                    "case {case}: {q} outside [{x0}, {y0}, {x1}, {y1}]"
+                );
+                lo = lo.min(q);
+                hi = hi.max(q);
+            }
+            checked += 1;
+            // Near the plane of the eye the extremes lie on a sliver of the ball that few
+            // samples reach.
+            if cz < 2.0 * r {
+                continue;
+            }
+            let (w, h) = (x1 - x0, y1 - y0);
+            for (got, want, size) in [(lo.x, x0, w), (hi.x, x1, w), (lo.y, y0, h), (hi.y, y1, h)] {
+                assert!((got - want).abs() <= 0.02 * size, "case {case}: loose side");
+            }
+        }
+        assert!(checked > 100, "{checked} cases checked");
     }
 }

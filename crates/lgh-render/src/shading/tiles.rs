@@ -340,8 +340,9 @@ impl TileBounds {
 }
 
 /// The pixel rectangle [x0, y0, x1, y1] (inclusive) covered by the sphere (c, r), or `None`
-/// if it is off screen. Conservative: the projection of the sphere's bounding box; a sphere
-/// reaching behind the eye, or of infinite radius, covers the whole image.
+/// if it is off screen. Conservative and tight: the exact bounds of the ball's projection
+/// ([`CameraFrame::sphere_bounds`]); a sphere reaching the plane of the eye, or of infinite
+/// radius, covers the whole image.
 #[must_use]
 pub fn screen_rect(
     frame: &CameraFrame,
@@ -354,24 +355,9 @@ pub fn screen_rect(
         return None;
     }
     let full = Some([0, 0, width - 1, height - 1]);
-    if !r.is_finite() {
+    let Some([lo_x, lo_y, hi_x, hi_y]) = frame.sphere_bounds(c, r) else {
         return full;
-    }
-    let (mut lo_x, mut lo_y, mut hi_x, mut hi_y) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
-    for k in 0..8 {
-        let corner = c + Vec3::new(
-            if k & 1 == 0 { -r } else { r },
-            if k & 2 == 0 { -r } else { r },
-            if k & 4 == 0 { -r } else { r },
-        );
-        let Some((p, _)) = frame.project(corner).filter(|&(_, z)| z > 1e-6) else {
-            return full;
-        };
-        lo_x = lo_x.min(p.x);
-        lo_y = lo_y.min(p.y);
-        hi_x = hi_x.max(p.x);
-        hi_y = hi_y.max(p.y);
-    }
+    };
     if hi_x < 0.0 || hi_y < 0.0 || lo_x >= width as f32 || lo_y >= height as f32 {
         return None;
     }
