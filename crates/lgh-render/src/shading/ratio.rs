@@ -10,7 +10,8 @@ use glam::Vec3;
 use lgh_core::timing::Timings;
 use rayon::prelude::*;
 
-use crate::denoise::atrous::{AtrousBuffers, AtrousParams, filter_ratio_pair_in_place};
+use crate::denoise::atrous::{AtrousParams, filter_ratio_pair_in_place};
+use crate::memory::FrameMemory;
 use crate::passes::gbuffer::GBuffer;
 use crate::shading::interleave::{self, BlurParams};
 use crate::shading::shadow_pass::ShadowEstimates;
@@ -104,7 +105,8 @@ pub fn composite(g: &GBuffer, a: &[Vec3], ratio: &[Vec3]) -> Vec<Vec3> {
 /// Recombines the unshadowed sum `a` and the shadow estimates if interleaved (timing
 /// `interleave_blur`), filters the shadow estimates and composites: the indirect radiance
 /// albedo / pi x A x D(S) / D(U), A, the ratio (filtered and raw) and the number of rays.
-/// Timings `shadow_filter` and `composite` go to `t` too. The filter works in `buffers`.
+/// Timings `shadow_filter` and `composite` go to `t` too. The filter works in `memory`'s
+/// planes, and the blur's discontinuities are kept there while the view stands still.
 #[must_use]
 pub fn shadowed_indirect(
     world: &World,
@@ -113,7 +115,7 @@ pub fn shadowed_indirect(
     estimates: ShadowEstimates,
     settings: &RatioFilter,
     t: &mut Timings,
-    buffers: &mut AtrousBuffers,
+    memory: &mut FrameMemory,
 ) -> Shadowed {
     let n_px = g.len();
     if estimates.k == 0 {
@@ -144,9 +146,12 @@ pub fn shadowed_indirect(
     // "Interleaved sampling").
     let [a, s_hat, u_hat] = match &settings.interleave_blur {
         Some(p) => t.time("interleave_blur", || {
-            let disc = interleave::discontinuities(g, p);
-            let [a] = interleave::blur_n([a], g, &disc, &p.recombination());
-            let [s, u] = interleave::blur_n([s_hat, u_hat], g, &disc, p);
+            let key = [p.z_diff.to_bits(), p.n_diff.to_bits(), 0, 0];
+            let disc = memory
+                .discontinuities
+                .get_or_insert_with(g, key, || interleave::discontinuities(g, p));
+            let [a] = interleave::blur_n([a], g, disc, &p.recombination());
+            let [s, u] = interleave::blur_n([s_hat, u_hat], g, disc, p);
             [a, s, u]
         }),
         None => [a, s_hat, u_hat],
@@ -161,7 +166,7 @@ pub fn shadowed_indirect(
                 ..AtrousParams::lgh_defaults(world.radius)
             };
             let (mut s, mut u) = (s_hat, u_hat);
-            filter_ratio_pair_in_place(&mut s, &mut u, g, &params, buffers);
+            filter_ratio_pair_in_place(&mut s, &mut u, g, &params, &mut memory.filter);
             (s, u)
         } else {
             (s_hat, u_hat)

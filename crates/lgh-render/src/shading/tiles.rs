@@ -182,20 +182,28 @@ fn row_phases(
 /// Lights per task of the binning.
 const BIN_CHUNK: usize = 4096;
 
-/// The [`TileBounds`] of every tile of every sub-image of n x n interleaving (n = 1: the
-/// image), found in one pass over the G-buffer, in parallel over rows of tiles.
-struct AllBounds {
+/// What every tile of every sub-image of n x n interleaving (n = 1: the image) sees: its
+/// depth range and, per depth slice, the box and normal cone of its surface points. Found
+/// in one pass over the G-buffer, in parallel over rows of tiles; it depends on the
+/// G-buffer alone, so a caller may keep it while the view stands still
+/// ([`crate::memory::ViewCache`]).
+#[derive(Debug)]
+pub struct AllBounds {
     /// Tile edge in full-resolution pixels.
     tile: u32,
     tiles_x: u32,
     tiles_y: u32,
+    n: u32,
     n2: usize,
     /// Tile (tx, ty) of sub-image s is entry (ty n^2 + s) tiles_x + tx.
     bounds: Vec<TileBounds>,
 }
 
 impl AllBounds {
-    fn new(g: &GBuffer, n: u32, tile: u32) -> Self {
+    /// The bounds of G-buffer `g` under n x n interleaving, with tiles of `tile`
+    /// full-resolution pixels.
+    #[must_use]
+    pub fn new(g: &GBuffer, n: u32, tile: u32) -> Self {
         let tiles_x = g.width.div_ceil(tile);
         let tiles_y = g.height.div_ceil(tile);
         let n2 = (n * n) as usize;
@@ -227,6 +235,7 @@ impl AllBounds {
             tile,
             tiles_x,
             tiles_y,
+            n,
             n2,
             bounds,
         }
@@ -390,20 +399,34 @@ impl InterleavedBins {
         radii: &[f32],
         sub: &[u16],
     ) -> Self {
-        use rayon::prelude::*;
         let n = n.max(1);
+        let all = AllBounds::new(g, n, tile.max(1) * n);
+        Self::from_bounds(g, frame, &all, centres, radii, sub)
+    }
+
+    /// [`InterleavedBins::build`] with the tile bounds `all` of `g` already found (their
+    /// interleaving and tile size).
+    #[must_use]
+    pub fn from_bounds(
+        g: &GBuffer,
+        frame: &CameraFrame,
+        all: &AllBounds,
+        centres: &[Vec3],
+        radii: &[f32],
+        sub: &[u16],
+    ) -> Self {
+        let n = all.n;
         let mut members = vec![Vec::new(); (n * n) as usize];
         for (i, &s) in sub.iter().enumerate() {
             members[usize::from(s)].push(i as u32);
         }
-        let all = AllBounds::new(g, n, tile.max(1) * n);
         let bins = members
             .par_iter()
             .enumerate()
             .map(|(s, m)| {
                 let c: Vec<Vec3> = m.iter().map(|&i| centres[i as usize]).collect();
                 let r: Vec<f32> = m.iter().map(|&i| radii[i as usize]).collect();
-                TileBins::from_bounds(g, frame, &all, s, &c, &r)
+                TileBins::from_bounds(g, frame, all, s, &c, &r)
             })
             .collect();
         Self { n, members, bins }

@@ -65,7 +65,7 @@ use crate::settings::RenderError;
 use crate::shading::ratio::{RATIO_CORRECTION, RATIO_VISIBILITY, RatioFilter, shadowed_indirect};
 use crate::shading::reservoirs::ReservoirLayout;
 use crate::shading::shadow_pass::{ShadowPass, Targets};
-use crate::shading::tiles::InterleavedBins;
+use crate::shading::tiles::{AllBounds, InterleavedBins};
 
 pub mod light_batch;
 mod lights;
@@ -245,11 +245,14 @@ pub fn render_lgh(
     if let Some(level) = settings.only_level {
         lights.show_only_level(level);
     }
-    let bins = InterleavedBins::build(
+    let tile = all.tiling.tile.unwrap_or_else(|| auto_tile(n)).max(1);
+    let bounds = memory
+        .tile_bounds
+        .get_or_insert_with(g, [n, tile, 0, 0], || AllBounds::new(g, n, tile * n));
+    let bins = InterleavedBins::from_bounds(
         g,
         frame,
-        all.tiling.tile.unwrap_or_else(|| auto_tile(n)),
-        n,
+        bounds,
         &lights.position,
         &lights.reach,
         &lights.sub,
@@ -309,7 +312,7 @@ pub fn render_lgh(
         },
         ..all.ratio_filter(n)
     };
-    let shadowed = shadowed_indirect(world, g, a, estimates, &filter, &mut t, &mut memory.filter);
+    let shadowed = shadowed_indirect(world, g, a, estimates, &filter, &mut t, memory);
     stats.shadow_rays = shadowed.rays;
     Ok(MethodOutput {
         radiance: shadowed.indirect,

@@ -323,7 +323,7 @@ pub fn render_slc(
     let lights_per_pixel: Vec<u32> = shaded.par_iter().map(|p| p.1).collect();
     let a: Vec<Vec3> = shaded.into_par_iter().map(|p| p.0).collect();
     let filter = all.ratio_filter(n);
-    let shadowed = shadowed_indirect(world, g, a, estimates, &filter, &mut t, &mut memory.filter);
+    let shadowed = shadowed_indirect(world, g, a, estimates, &filter, &mut t, memory);
     let stats = SlcStats {
         avg_lights_per_pixel: g.mean_over_hits(&lights_per_pixel),
         shadow_rays: shadowed.rays,
