@@ -91,6 +91,8 @@ impl Default for TemporalSettings {
 #[derive(Clone, Debug)]
 pub struct History {
     frame: CameraFrame,
+    /// The view of the G-buffer the history was made with ([`GBuffer::view`]).
+    view: Option<(u64, CameraFrame)>,
     width: u32,
     height: u32,
     depth: Vec<f32>,
@@ -104,6 +106,7 @@ impl History {
     pub fn new(frame: CameraFrame, g: &GBuffer, value: Vec<Vec3>) -> Self {
         Self {
             frame,
+            view: g.view,
             width: g.width,
             height: g.height,
             depth: g.depth.clone(),
@@ -117,17 +120,36 @@ impl History {
 /// (off screen, occluded, another surface).
 #[must_use]
 pub fn reproject(h: &History, g: &GBuffer, s: &TemporalSettings) -> Vec<Option<Vec3>> {
+    let same = h.shows_view_of(g);
     (0..g.len())
         .into_par_iter()
-        .map(|i| reproject_pixel(h, g, s, i))
+        .map(|i| reproject_pixel(h, g, s, i, same))
         .collect()
 }
 
-/// [`reproject`] for pixel `i`.
+impl History {
+    /// True if the history was made with a G-buffer of the same known view as `g` (a
+    /// camera standing still): every pixel then sees what it saw, and reprojection is the
+    /// identity.
+    fn shows_view_of(&self, g: &GBuffer) -> bool {
+        g.view.is_some() && self.view == g.view && (self.width, self.height) == (g.width, g.height)
+    }
+}
+
+/// [`reproject`] for pixel `i`; `same`: [`History::shows_view_of`] `g`.
 #[inline]
-fn reproject_pixel(h: &History, g: &GBuffer, s: &TemporalSettings, i: usize) -> Option<Vec3> {
+fn reproject_pixel(
+    h: &History,
+    g: &GBuffer,
+    s: &TemporalSettings,
+    i: usize,
+    same: bool,
+) -> Option<Vec3> {
     if !g.is_hit(i) {
         return None;
+    }
+    if same {
+        return Some(h.value[i]);
     }
     let (px, z) = h.frame.project(g.position[i])?;
     if px.x < 0.0 || px.y < 0.0 {
@@ -212,18 +234,25 @@ impl TemporalFilter {
     ) -> Vec<Vec3> {
         // Reprojection and blend in one pass, and the history's planes refilled in place:
         // no intermediate image, no fresh memory to page in.
+        let same = self.history.as_ref().is_some_and(|h| h.shows_view_of(g));
         let out: Vec<Vec3> = match &self.history {
             Some(h) => (0..g.len())
                 .into_par_iter()
-                .map(|i| blend_pixel(value, spread, reproject_pixel(h, g, s, i), g, s.alpha, i))
+                .map(|i| {
+                    let previous = reproject_pixel(h, g, s, i, same);
+                    blend_pixel(value, spread, previous, g, s.alpha, i)
+                })
                 .collect(),
             None => value.to_vec(),
         };
         match &mut self.history {
             Some(h) => {
-                (h.frame, h.width, h.height) = (frame, g.width, g.height);
-                par_copy_into(&mut h.depth, &g.depth);
-                par_copy_into(&mut h.normal, &g.normal);
+                (h.frame, h.view, h.width, h.height) = (frame, g.view, g.width, g.height);
+                // The same view has the same depths and normals.
+                if !same {
+                    par_copy_into(&mut h.depth, &g.depth);
+                    par_copy_into(&mut h.normal, &g.normal);
+                }
                 par_copy_into(&mut h.value, &out);
             }
             None => self.history = Some(History::new(frame, g, out.clone())),
@@ -278,6 +307,8 @@ mod tests {
         Vec3::splat(0.5 + 0.25 * (p.x * 2.0).sin() * (p.z * 1.5).cos())
     }
 
+    /// A camera that stands still reprojects every pixel to itself: by projection (a
+    /// G-buffer whose view is unknown) and by the shortcut for a known view.
     #[test]
     fn a_static_camera_reprojects_to_the_identity() {
         let world = floor();
@@ -285,10 +316,17 @@ mod tests {
         let frame = camera(0.0).frame(w, h);
         let g = GBuffer::render(&world, &frame, w, h);
         let value: Vec<Vec3> = g.position.iter().map(|&p| field(p)).collect();
-        let hist = History::new(frame, &g, value.clone());
-        let r = reproject(&hist, &g, &TemporalSettings::default());
-        for (i, v) in r.iter().enumerate() {
-            assert_eq!(*v, Some(value[i]), "pixel {i}");
+        let unknown = GBuffer {
+            view: None,
+            ..g.clone()
+        };
+        for (g, shortcut) in [(&g, true), (&unknown, false)] {
+            let hist = History::new(frame, g, value.clone());
+            assert_eq!(hist.shows_view_of(g), shortcut);
+            let r = reproject(&hist, g, &TemporalSettings::default());
+            for (i, v) in r.iter().enumerate() {
+                assert_eq!(*v, g.is_hit(i).then_some(value[i]), "pixel {i}");
+            }
         }
     }
 
