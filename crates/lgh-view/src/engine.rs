@@ -12,7 +12,6 @@ use lgh_render::accumulate::frame_settings;
 use lgh_render::image::heat::{HEAT_EXPOSURE, heat_map};
 use lgh_render::image::tonemap::tonemap_pixel;
 use lgh_render::methods::lgh::LghStats;
-use lgh_render::passes::par_copy_into;
 use lgh_render::sequence::Sequence;
 use lgh_render::{FrameMemory, Image, RenderError, Silent, World, render_frame_with};
 use lgh_scene::{Light, Scene};
@@ -106,7 +105,7 @@ impl FrameLoop {
         // Every frame its own seeds and, for lgh, its own grid offset.
         let settings = frame_settings(&state.settings, self.frame as u32, 2);
         self.frame += 1;
-        let frame = if still || !state.taa {
+        let mut frame = if still || !state.taa {
             render_frame_with(&self.world, &settings, &Silent, &mut self.memory)?
         } else {
             self.sequence.taa = Some(Default::default());
@@ -114,9 +113,10 @@ impl FrameLoop {
         };
         self.shown_version = Some(state.version);
         let display_start = Instant::now();
-        let pixels = &frame.image.pixels;
+        let pixels = &mut frame.image.pixels;
         if self.accumulated == 0 || self.sum.len() != pixels.len() {
-            par_copy_into(&mut self.sum, pixels);
+            // The frame's own image starts the sum: no copy.
+            self.sum = std::mem::take(pixels);
             self.accumulated = 1;
         } else {
             self.sum
@@ -125,29 +125,33 @@ impl FrameLoop {
                 .for_each(|(s, p)| *s += *p);
             self.accumulated += 1;
         }
-        let mut mean: Vec<Vec3> = if self.accumulated == 1 {
-            self.sum.par_iter().copied().collect()
-        } else {
-            let inv = 1.0 / self.accumulated as f32;
-            self.sum.par_iter().map(|s| *s * inv).collect()
-        };
         let mut exposure = self.exposure;
         let mut overdraw = None;
-        if state.heatmap
-            && let Some(counts) = &frame.method.lights_per_pixel
-        {
+        let heat = state
+            .heatmap
+            .then_some(frame.method.lights_per_pixel.as_ref())
+            .flatten();
+        // The mean and its tone-mapped pixels in one pass (or the heat map's).
+        let pack = |p: Vec3, exposure: f32| {
+            let [r, g, b] = tonemap_pixel(p, exposure);
+            (u32::from(r) << 16) | (u32::from(g) << 8) | u32::from(b)
+        };
+        let (mean, packed): (Vec<Vec3>, Vec<u32>) = if let Some(counts) = heat {
             let (colours, max) = heat_map(counts);
             overdraw = Some((frame.gbuffer.mean_over_hits(counts), max));
-            mean = colours;
             exposure = HEAT_EXPOSURE;
-        }
-        let packed = mean
-            .par_iter()
-            .map(|&p| {
-                let [r, g, b] = tonemap_pixel(p, exposure);
-                (u32::from(r) << 16) | (u32::from(g) << 8) | u32::from(b)
-            })
-            .collect();
+            let packed = colours.par_iter().map(|&c| pack(c, exposure)).collect();
+            (colours, packed)
+        } else {
+            let inv = 1.0 / self.accumulated as f32;
+            self.sum
+                .par_iter()
+                .map(|&s| {
+                    let m = s * inv;
+                    (m, pack(m, exposure))
+                })
+                .unzip()
+        };
         let lgh_stats = frame.stats::<LghStats>();
         let mut timings = frame.timings.0.clone();
         timings.push((
