@@ -60,7 +60,7 @@ impl RowContext<'_> {
 }
 
 /// A chunk's index and its lights' B_l(d) f_j (RGB planes), as stratified selection
-/// evaluates it again.
+/// reads it.
 type ChunkValues = (usize, [[f32; LANES]; 3]);
 
 /// What a task of the lighting loop keeps from pixel to pixel.
@@ -70,6 +70,9 @@ pub(super) struct RowScratch {
     batch: LightBatch,
     /// The selection weight of each chunk of the pixel's batch (stratified selection).
     chunk_weights: Vec<f32>,
+    /// Each chunk's lanes as the loop evaluated them, its selection weights and
+    /// B_l(d) f_j: the picks read them instead of evaluating their chunks again.
+    chunk_lanes: Vec<([f32; LANES], [[f32; LANES]; 3])>,
 }
 
 /// The selection weights f_j of a chunk's lights: the luminance of their contributions,
@@ -158,6 +161,7 @@ fn shade_pixel(
     let RowScratch {
         batch,
         chunk_weights,
+        chunk_lanes,
     } = scratch;
     // Stratified selection applies where targets are drawn after selection.
     let stratified =
@@ -175,6 +179,7 @@ fn shade_pixel(
     }
     let batch = &*batch;
     chunk_weights.clear();
+    chunk_lanes.clear();
     // A summed lane by lane over the chunks, reduced once per pixel.
     let mut sum = [[0.0f32; LANES]; 3];
     for chunk in 0..batch.chunks() {
@@ -197,6 +202,7 @@ fn shade_pixel(
         let lum = candidate_weights(batch, chunk, &lanes, candidates_from);
         if stratified {
             chunk_weights.push(lum.iter().sum());
+            chunk_lanes.push((lum, lanes.value));
             continue;
         }
         if settings.jitter == JitterAt::Ray && pass_over(res, lum.iter().sum()) {
@@ -258,11 +264,8 @@ fn shade_pixel(
     *a += Vec3::from(sum.map(|s| s.iter().sum::<f32>()));
     if stratified {
         let lanes = |c: usize| {
-            let lanes = batch.eval(c, xp, n, eps2);
-            (
-                candidate_weights(batch, c, &lanes, candidates_from),
-                (c, lanes.value),
-            )
+            let (lum, value) = chunk_lanes[c];
+            (lum, (c, value))
         };
         let take = |slot: usize, lane: usize, &(c, value): &ChunkValues, f, total| {
             let j = batch.index[c * LANES + lane] as usize;
