@@ -9,8 +9,9 @@ use crate::shading::tiles::AllBounds;
 
 /// Working memory that frames reuse: the hierarchy builder's, the shadow filters' (about
 /// 90 MB each at 1280x720), and the G-buffer of a frame handed back with
-/// [`FrameMemory::recycle_gbuffer`]. A renderer of frame after frame keeps one
-/// ([`crate::frame::render_frame_with`]), so that no frame pays for paging in fresh memory.
+/// [`FrameMemory::recycle_gbuffer`], with what that G-buffer alone decides ([`ViewCache`]).
+/// A renderer of frame after frame keeps one ([`crate::frame::render_frame_with`]), so that
+/// no frame pays for paging in fresh memory or derives again what its still view kept.
 /// A clone is empty: it is only a cache.
 #[derive(Debug, Default)]
 pub struct FrameMemory {

@@ -102,6 +102,15 @@ pub fn composite(g: &GBuffer, a: &[Vec3], ratio: &[Vec3]) -> Vec<Vec3> {
         .collect()
 }
 
+/// The blur's discontinuities of `g` with `p`'s thresholds, kept in `memory` while the view
+/// stands still.
+fn discontinuities<'m>(g: &GBuffer, p: &BlurParams, memory: &'m mut FrameMemory) -> &'m [u8] {
+    let key = [p.z_diff.to_bits(), p.n_diff.to_bits(), 0, 0];
+    memory
+        .discontinuities
+        .get_or_insert_with(g, key, || interleave::discontinuities(g, p))
+}
+
 /// Recombines the unshadowed sum `a` and the shadow estimates if interleaved (timing
 /// `interleave_blur`), filters the shadow estimates and composites: the indirect radiance
 /// albedo / pi x A x D(S) / D(U), A, the ratio (filtered and raw) and the number of rays.
@@ -121,7 +130,9 @@ pub fn shadowed_indirect(
     if estimates.k == 0 {
         let a = match &settings.interleave_blur {
             Some(p) => t.time("interleave_blur", || {
-                interleave::recombine(a, g, &p.recombination())
+                let disc = discontinuities(g, p, memory);
+                let [a] = interleave::blur_n([a], g, disc, &p.recombination());
+                a
             }),
             None => a,
         };
@@ -146,10 +157,7 @@ pub fn shadowed_indirect(
     // "Interleaved sampling").
     let [a, s_hat, u_hat] = match &settings.interleave_blur {
         Some(p) => t.time("interleave_blur", || {
-            let key = [p.z_diff.to_bits(), p.n_diff.to_bits(), 0, 0];
-            let disc = memory
-                .discontinuities
-                .get_or_insert_with(g, key, || interleave::discontinuities(g, p));
+            let disc = discontinuities(g, p, memory);
             let [a] = interleave::blur_n([a], g, disc, &p.recombination());
             let [s, u] = interleave::blur_n([s_hat, u_hat], g, disc, p);
             [a, s, u]

@@ -349,9 +349,9 @@ impl TileBounds {
 }
 
 /// The pixel rectangle [x0, y0, x1, y1] (inclusive) covered by the sphere (c, r), or `None`
-/// if it is off screen. Conservative and tight: the exact bounds of the ball's projection
-/// ([`CameraFrame::sphere_bounds`]); a sphere reaching the plane of the eye, or of infinite
-/// radius, covers the whole image.
+/// if it is off screen or wholly behind the eye. Conservative and tight: the exact bounds of
+/// the ball's projection ([`CameraFrame::sphere_bounds`]); a sphere reaching the plane of
+/// the eye, or of infinite radius, covers the whole image.
 #[must_use]
 pub fn screen_rect(
     frame: &CameraFrame,
@@ -361,6 +361,11 @@ pub fn screen_rect(
     r: f32,
 ) -> Option<[u32; 4]> {
     if width == 0 || height == 0 {
+        return None;
+    }
+    // Wholly behind the plane of the eye: no pixel sees a point of it (the G-buffer's
+    // depths are positive).
+    if (c - frame.origin).dot(frame.forward) + r < 0.0 {
         return None;
     }
     let full = Some([0, 0, width - 1, height - 1]);
@@ -511,5 +516,29 @@ mod tests {
             }
             assert!(seen.iter().all(|&c| c == 1), "n = {n}: {seen:?}");
         }
+    }
+
+    /// A sphere wholly behind the eye is off screen, one that reaches past the plane of the
+    /// eye covers the image, and one in front covers the pixel of its centre.
+    #[test]
+    fn screen_rects_behind_across_and_in_front_of_the_eye() {
+        let (w, h) = (32u32, 16u32);
+        let (_, frame) = flat_view(w, h);
+        // The camera at z = 5 looks down -z.
+        assert_eq!(
+            screen_rect(&frame, w, h, Vec3::new(0.0, 0.0, 7.0), 1.0),
+            None
+        );
+        assert_eq!(
+            screen_rect(&frame, w, h, Vec3::new(0.0, 0.0, 5.5), 1.0),
+            Some([0, 0, w - 1, h - 1])
+        );
+        let c = Vec3::new(0.3, -0.2, 0.0);
+        let Some([x0, y0, x1, y1]) = screen_rect(&frame, w, h, c, 0.2) else {
+            panic!("a sphere in front is on screen");
+        };
+        let (p, _) = frame.project(c).unwrap();
+        assert!((x0..=x1).contains(&(p.x as u32)) && (y0..=y1).contains(&(p.y as u32)));
+        assert!(x1 - x0 < w / 2, "{x0}..{x1}: not tight");
     }
 }
