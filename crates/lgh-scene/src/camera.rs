@@ -154,80 +154,68 @@ mod tests {
         assert!(r.x > 100.0);
     }
 
-    /// A small deterministic generator for the tests (xorshift), uniform in [0, 1).
-    fn uniforms(seed: u64) -> impl FnMut() -> f32 {
-        let mut x = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
-        move || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 40) as f32 / (1u64 << 24) as f32
-        }
+    /// A point of `Vec3` with coordinates in [-s/2, s/2).
+    fn offset(s: f32) -> impl proptest::strategy::Strategy<Value = Vec3> {
+        use proptest::strategy::Strategy;
+        (-0.5f32..0.5, -0.5f32..0.5, -0.5f32..0.5).prop_map(move |(x, y, z)| Vec3::new(x, y, z) * s)
     }
 
-    /// The sphere's rectangle holds the projection of every point of the ball (sampled on
-    /// the surface and inside), and is tight: the samples reach within 2% of each side
-    /// (balls at least their radius away from the plane of the eye).
-    /// Spheres that reach the plane of the eye have none.
-    #[test]
-    fn sphere_bounds_hold_the_ball_tightly() {
-        let mut u = uniforms(7);
-        let mut checked = 0;
-        for case in 0..300 {
-            let mut v = |s: f32| Vec3::new(u() - 0.5, u() - 0.5, u() - 0.5) * s;
-            let (p0, p1, up, c0) = (v(10.0), v(10.0), v(0.5), v(6.0));
-            let cam = Camera {
-                position: p0,
-                look_at: p1,
-                up: Vec3::Y + up,
-                fov_y_degrees: 20.0 + 120.0 * u(),
-            };
-            if !cam.is_valid() {
-                continue;
-            }
+    /// `n` points spread evenly over the unit sphere (a Fibonacci lattice).
+    fn lattice(n: usize) -> impl Iterator<Item = Vec3> {
+        let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+        (0..n).map(move |k| {
+            let z = 1.0 - 2.0 * (k as f32 + 0.5) / n as f32;
+            let s = (1.0 - z * z).max(0.0).sqrt();
+            let phi = golden * k as f32;
+            Vec3::new(s * phi.cos(), s * phi.sin(), z)
+        })
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        /// The sphere's rectangle holds the projection of every point of the ball (on its
+        /// surface and on a sphere inside), and is tight: the points reach within 2% of each
+        /// side (balls at least their radius away from the plane of the eye; nearer, the
+        /// extremes lie on a sliver of the ball that the lattice may miss). Spheres that
+        /// reach the plane of the eye have no rectangle.
+        #[test]
+        fn sphere_bounds_hold_the_ball_tightly(
+            position in offset(10.0),
+            look_at in offset(10.0),
+            tilt in offset(0.5),
+            fov_y_degrees in 20.0f32..140.0,
+            ahead in 0.2f32..8.2,
+            aside in offset(6.0),
+            r in 0.01f32..3.0,
+        ) {
+            let cam = Camera { position, look_at, up: Vec3::Y + tilt, fov_y_degrees };
+            proptest::prop_assume!(cam.is_valid());
             let f = cam.frame(320, 180);
-            let c = f.origin + f.forward * (0.2 + 8.0 * u()) + c0;
-            let r = 0.01 + 3.0 * u() * u();
+            let c = f.origin + f.forward * ahead + aside;
             let cz = (c - f.origin).dot(f.forward);
             let Some([x0, y0, x1, y1]) = f.sphere_bounds(c, r) else {
-                assert!(
-                    cz <= r * 1.001,
-                    "case {case}: no bounds for a ball in front"
-                );
-                continue;
+                proptest::prop_assert!(cz <= r * 1.001, "no bounds for a ball in front");
+                return Ok(());
             };
-            assert!(
-                cz > r,
-                "case {case}: bounds for a ball that reaches the eye"
-            );
+            proptest::prop_assert!(cz > r, "bounds for a ball that reaches the eye");
             let (mut lo, mut hi) = (Vec2::splat(f32::MAX), Vec2::splat(f32::MIN));
-            for k in 0..4000 {
-                // A uniform direction, on the surface for even k and inside for odd k.
-                let z = 2.0 * u() - 1.0;
-                let phi = std::f32::consts::TAU * u();
-                let s = (1.0 - z * z).max(0.0).sqrt();
-                let dir = Vec3::new(s * phi.cos(), s * phi.sin(), z);
-                let p = c + dir * if k % 2 == 0 { r } else { r * u() };
+            for (k, dir) in lattice(4000).enumerate() {
+                let p = c + dir * if k % 2 == 0 { r } else { 0.5 * r };
                 let (q, _) = f.project(p).unwrap();
                 let tol = 1e-3 * (1.0 + q.abs().max_element());
-                assert!(
+                proptest::prop_assert!(
                     q.x >= x0 - tol && q.x <= x1 + tol && q.y >= y0 - tol && q.y <= y1 + tol,
-                    "case {case}: {q} outside [{x0}, {y0}, {x1}, {y1}]"
+                    "{} outside [{}, {}, {}, {}]", q, x0, y0, x1, y1
                 );
                 lo = lo.min(q);
                 hi = hi.max(q);
             }
-            checked += 1;
-            // Near the plane of the eye the extremes lie on a sliver of the ball that few
-            // samples reach.
-            if cz < 2.0 * r {
-                continue;
-            }
-            let (w, h) = (x1 - x0, y1 - y0);
-            for (got, want, size) in [(lo.x, x0, w), (hi.x, x1, w), (lo.y, y0, h), (hi.y, y1, h)] {
-                assert!((got - want).abs() <= 0.02 * size, "case {case}: loose side");
+            if cz >= 2.0 * r {
+                let (w, h) = (x1 - x0, y1 - y0);
+                for (got, want, size) in [(lo.x, x0, w), (hi.x, x1, w), (lo.y, y0, h), (hi.y, y1, h)] {
+                    proptest::prop_assert!((got - want).abs() <= 0.02 * size, "loose side: {} vs {}", got, want);
+                }
             }
         }
-        assert!(checked > 100, "{checked} cases checked");
     }
 }
