@@ -24,6 +24,7 @@ use glam::{UVec3, Vec3};
 
 use rayon::prelude::*;
 
+use super::splat::cell_of;
 use super::{GridGeometry, LightingGrid};
 use crate::blending::{LevelRole, blend};
 
@@ -215,12 +216,8 @@ impl Partition {
                 total += blend(role, (x - p).length(), r);
                 continue;
             }
-            // `locate` with 1 / h_l (truncation after the clamp is the floor).
-            let u = (p - origin) * inv_h;
-            let c = u
-                .clamp(Vec3::ZERO, Vec3::splat((cells - 1) as f32))
-                .as_uvec3();
-            let f = (u - c.as_vec3()).clamp(Vec3::ZERO, Vec3::ONE);
+            // `locate`, multiplying by 1 / h_l.
+            let (c, f) = cell_of((p - origin) * inv_h, cells);
             let centre = origin + (c.as_vec3() + Vec3::splat(0.5)) * h;
             // Where B_l is the same at every distance the level's centroids can have, the
             // level adds that value times the weights, which sum to one (every vertex around

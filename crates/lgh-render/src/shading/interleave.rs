@@ -402,14 +402,6 @@ fn full_runs(src: &[f32], out: &mut [f32], at: usize, d: usize, weights: &[f32],
     }
 }
 
-/// Recombines interleaved sub-image estimates: [`discontinuities`] then [`blur`] (the
-/// unshadowed sum takes [`BlurParams::recombination`] of the blur as `p`).
-#[must_use]
-pub fn recombine(img: Vec<Vec3>, g: &GBuffer, p: &BlurParams) -> Vec<Vec3> {
-    let [out] = blur_n([img], g, &discontinuities(g, p), p);
-    out
-}
-
 /// Image rows per parallel block of the vertical [`runs`] (at least the blur radius).
 const VERTICAL_BLOCK_ROWS: usize = 32;
 

@@ -174,7 +174,13 @@ impl Level {
 /// Cell and in-cell fraction of a point at level spacing `h` with `r` cells per axis.
 #[inline]
 pub(crate) fn locate(p: Vec3, origin: Vec3, h: f32, r: u32) -> (UVec3, Vec3) {
-    let u = (p - origin) / h;
+    cell_of((p - origin) / h, r)
+}
+
+/// Cell and in-cell fraction (each in [0, 1]) of the point at grid coordinates `u` (its
+/// offset from the origin in cells) in a grid of `r` cells per axis.
+#[inline]
+pub(crate) fn cell_of(u: Vec3, r: u32) -> (UVec3, Vec3) {
     // Truncation after the clamp is the floor (the clamped value is not negative), without
     // the libm call that `floor` costs on baseline x86-64.
     let c = u.clamp(Vec3::ZERO, Vec3::splat((r - 1) as f32)).as_uvec3();
