@@ -1,12 +1,13 @@
 //! `lgh bench`: performance measurements.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use anyhow::Result;
+use clap::builder::TypedValueParser;
 use clap::{Args, Subcommand};
 use lgh_render::World;
-use lgh_render::raybench::bench_rays;
+use lgh_render::raybench::{RayBench, bench_rays};
+use lgh_render::world::accel::AccelKind;
 
 use crate::scene_arg::load_scene;
 
@@ -92,9 +93,16 @@ pub enum BenchWhat {
 pub struct RaysArgs {
     /// Scene file (.toml, .gltf, .glb, .obj). Default: the built-in Cornell box.
     pub scene: Option<PathBuf>,
-    /// Rays of each kind.
-    #[arg(long, default_value_t = 1_000_000)]
+    /// Rays of each kind (at most 100 million).
+    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(1..=100_000_000).map(|v| v as usize))]
     pub rays: usize,
+    /// Ray tracers to measure, alternated in each round (obvhs, embree). Default: every one
+    /// this build has.
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub accel: Vec<AccelKind>,
+    /// Rounds (each measures every ray tracer once; the medians are reported).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100).map(|v| v as usize))]
+    pub rounds: usize,
     /// Threads and output.
     #[command(flatten)]
     pub options: BenchOptions,
@@ -117,31 +125,75 @@ fn rays(args: &RaysArgs) -> Result<()> {
     let threads = args.options.threads()?;
     let scene = load_scene(args.scene.as_deref())?;
     let name = scene.name.clone();
-    let t = Instant::now();
-    let world = World::new(scene);
-    let build_ms = t.elapsed().as_secs_f64() * 1e3;
-    let r = bench_rays(&world, args.rays.max(1), build_ms);
+    let kinds = if args.accel.is_empty() {
+        AccelKind::available()
+    } else {
+        args.accel.clone()
+    };
+    // One world per ray tracer; the rounds alternate them, so that a change of the machine's
+    // speed during the run affects both alike.
+    let worlds = kinds
+        .iter()
+        .map(|&k| Ok((k, World::with_accel(scene.clone(), k)?)))
+        .collect::<Result<Vec<_>>>()?;
+    let mut runs: Vec<Vec<RayBench>> = vec![Vec::new(); worlds.len()];
+    for _ in 0..args.rounds {
+        for ((kind, world), runs) in worlds.iter().zip(&mut runs) {
+            runs.push(bench_rays(world, *kind, args.rays.max(1), 3)?);
+        }
+    }
+    let med = |runs: &[RayBench], f: fn(&RayBench) -> f64| median(runs.iter().map(f).collect());
+    let rows: Vec<serde_json::Value> = runs
+        .iter()
+        .map(|r| {
+            serde_json::json!({
+                "accel": r[0].accel.name(),
+                "triangles": r[0].triangles,
+                "rays": r[0].rays,
+                "bvh_build_ms": med(r, |x| x.bvh_build_ms),
+                "bvh_rebuild_ms": med(r, |x| x.bvh_rebuild_ms),
+                "primary_rays_per_s": med(r, |x| x.primary_rays_per_s),
+                "shadow_rays_per_s": med(r, |x| x.shadow_rays_per_s),
+                "shadow_single_rays_per_s": med(r, |x| x.shadow_single_rays_per_s),
+                "bounce_rays_per_s": med(r, |x| x.bounce_rays_per_s),
+            })
+        })
+        .collect();
     if args.options.json {
         let v = serde_json::json!({
             "scene": name,
             "threads": threads,
-            "triangles": r.triangles,
-            "rays": r.rays,
-            "bvh_build_ms": r.bvh_build_ms,
-            "primary_rays_per_s": r.primary_rays_per_s,
-            "shadow_rays_per_s": r.shadow_rays_per_s,
-            "bounce_rays_per_s": r.bounce_rays_per_s,
+            "rounds": args.rounds,
+            "backends": rows,
         });
         println!("{v}");
-    } else {
-        println!(
-            "scene       {name} ({} triangles, {threads} threads)",
-            r.triangles
-        );
-        println!("bvh build   {:.1} ms", r.bvh_build_ms);
-        println!("primary     {:.2} Mrays/s", r.primary_rays_per_s / 1e6);
-        println!("shadow      {:.2} Mrays/s", r.shadow_rays_per_s / 1e6);
-        println!("bounce      {:.2} Mrays/s", r.bounce_rays_per_s / 1e6);
+        return Ok(());
     }
+    let tri = runs
+        .first()
+        .and_then(|r| r.first())
+        .map_or(0, |r| r.triangles);
+    println!(
+        "scene {name} ({tri} triangles, {threads} threads), medians of {} alternated rounds",
+        args.rounds
+    );
+    println!(
+        "{:<8} {:>10} {:>11} {:>9} {:>9} {:>9} {:>9}",
+        "accel", "build ms", "rebuild ms", "primary", "shadow", "shadow 1", "bounce"
+    );
+    for row in &rows {
+        let f = |k: &str| row[k].as_f64().unwrap_or(0.0);
+        println!(
+            "{:<8} {:>10.1} {:>11.1} {:>9.2} {:>9.2} {:>9.2} {:>9.2}",
+            row["accel"].as_str().unwrap_or(""),
+            f("bvh_build_ms"),
+            f("bvh_rebuild_ms"),
+            f("primary_rays_per_s") / 1e6,
+            f("shadow_rays_per_s") / 1e6,
+            f("shadow_single_rays_per_s") / 1e6,
+            f("bounce_rays_per_s") / 1e6,
+        );
+    }
+    println!("(rays in millions per second; shadow: batches of 256, shadow 1: one at a time)");
     Ok(())
 }

@@ -13,6 +13,7 @@ use lgh_render::image::heat::{HEAT_EXPOSURE, heat_map};
 use lgh_render::image::tonemap::tonemap_pixel;
 use lgh_render::methods::lgh::LghStats;
 use lgh_render::sequence::Sequence;
+use lgh_render::world::accel::AccelKind;
 use lgh_render::{FrameMemory, Image, RenderError, Silent, World, render_frame_with};
 use lgh_scene::{Light, Scene};
 use rayon::prelude::*;
@@ -59,13 +60,20 @@ pub struct FrameLoop {
 }
 
 impl FrameLoop {
-    /// The loop over `scene` (finished), shown with `exposure` (None: the scene's).
-    #[must_use]
-    pub fn new(scene: Scene, exposure: Option<f32>) -> Self {
+    /// The loop over `scene` (finished), shown with `exposure` (None: the scene's), traced
+    /// with the ray tracer `accel`.
+    ///
+    /// # Errors
+    /// The ray tracer is not in this build or cannot build the BVH.
+    pub fn new(
+        scene: Scene,
+        exposure: Option<f32>,
+        accel: AccelKind,
+    ) -> Result<Self, lgh_render::world::accel::AccelError> {
         let exposure = exposure.unwrap_or(scene.exposure);
-        let world = World::new(scene);
+        let world = World::with_accel(scene, accel)?;
         let rest_lights = world.rest_view().1.to_vec();
-        Self {
+        Ok(Self {
             world,
             rest_lights,
             sequence: Sequence::new(None),
@@ -75,7 +83,7 @@ impl FrameLoop {
             shown_version: None,
             frame: 0,
             exposure,
-        }
+        })
     }
 
     /// The world rendered (its scene, radius and centre).

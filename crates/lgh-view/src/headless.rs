@@ -148,7 +148,7 @@ pub fn start(args: &ViewArgs, scene: Scene) -> Result<(FrameLoop, ViewState)> {
     settings.validate()?;
     check_keys(&args.keys)?;
     let camera = scene.camera();
-    let engine = FrameLoop::new(scene, settings.exposure);
+    let engine = FrameLoop::new(scene, settings.exposure, args.accel.kind())?;
     let state = ViewState::new(settings, &camera, engine.world().radius, args.taa);
     Ok((engine, state))
 }

@@ -47,6 +47,9 @@ pub struct ViewArgs {
     /// The starting rendering settings (keys change them; see the controls in `lgh view --help`).
     #[command(flatten)]
     pub settings: RenderSettings,
+    /// The ray tracer.
+    #[command(flatten)]
+    pub accel: lgh_render::world::accel::AccelChoice,
     /// Start with temporal filtering of the shadows (T toggles it).
     #[arg(long)]
     pub taa: bool,

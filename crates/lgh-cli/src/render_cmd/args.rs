@@ -33,6 +33,9 @@ pub struct RenderArgs {
     /// The rendering settings.
     #[command(flatten)]
     pub settings: RenderSettings,
+    /// The ray tracer.
+    #[command(flatten)]
+    pub accel: lgh_render::world::accel::AccelChoice,
     /// Render N frames of the (static) view with independent VPL sets (seeds derived from
     /// --seed; for lgh also a random grid offset each) and write their mean: a progressive
     /// render that converges as N grows. For brute it is the brute force over the union of

@@ -120,7 +120,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let scene_name = scene.name.clone();
 
     let t = Instant::now();
-    let world = World::new(scene);
+    let world = World::with_accel(scene, args.accel.kind())?;
     let bvh_ms = t.elapsed().as_secs_f64() * 1e3;
 
     let bars = Bars::new(args.quiet);
@@ -146,6 +146,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             settings: &settings,
             threads,
             triangles: world.accel.len(),
+            accel: world.accel.kind().name(),
             load_ms,
             bvh_ms,
             frames: args.accumulate,

@@ -36,6 +36,8 @@ pub struct FrameReport<'a> {
     pub threads: usize,
     /// Triangles in the BVH.
     pub triangles: usize,
+    /// The ray tracer (`obvhs` or `embree`).
+    pub accel: &'static str,
     /// Frames averaged (`--accumulate`).
     pub accumulated_frames: u32,
     /// Per-pass wall times in ms, summed over the frames (`total` includes the BVH build).
@@ -59,6 +61,8 @@ pub struct ReportContext<'a> {
     pub threads: usize,
     /// Triangles in the BVH.
     pub triangles: usize,
+    /// The ray tracer.
+    pub accel: &'static str,
     /// Scene loading time.
     pub load_ms: f64,
     /// BVH build time.
@@ -112,6 +116,7 @@ impl<'a> FrameReport<'a> {
             seed: s.seed,
             threads: c.threads,
             triangles: c.triangles,
+            accel: c.accel,
             accumulated_frames: c.frames,
             timings_ms: timings,
             memory: MemoryReport {

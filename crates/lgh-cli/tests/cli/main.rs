@@ -1,5 +1,6 @@
 //! The command line as a user meets it: successful renders and every kind of bad input.
 
+mod accel;
 mod hardening;
 mod view;
 

@@ -191,9 +191,21 @@ impl<'a> ShadowPass<'a> {
     }
 }
 
+/// Pixels whose shadow rays are traced as one batch ([`crate::world::accel::Accel::occluded_many`]).
+const RAY_BATCH_PIXELS: usize = 32;
+
+/// One traced sample of a batch: the pixel (in the batch), its U_k and the sample.
+struct Traced<'a> {
+    pixel: usize,
+    u_k: Vec3,
+    sample: &'a ShadowSample,
+}
+
 /// One shadow ray per held sample of the pixels `first..first + s.len()`: writes their S and
 /// U and returns the number of rays. A visible sample adds its U_k times its gain
-/// ([`Targets::visible_gain`] if the method has targets) to S.
+/// ([`Targets::visible_gain`] if the method has targets) to S. The rays of
+/// `RAY_BATCH_PIXELS` pixels are traced as one batch (Embree traces it as a stream); each
+/// pixel's S is summed in its samples' order, so the image does not depend on the batching.
 fn trace_band(
     pass: &ShadowPass,
     reservoirs: &ShadowReservoirs,
@@ -205,46 +217,76 @@ fn trace_band(
     let ShadowPass { world, g, seed, .. } = *pass;
     let k = reservoirs.k();
     s_out
-        .par_iter_mut()
-        .zip(u_out.par_iter_mut())
+        .par_chunks_mut(RAY_BATCH_PIXELS)
+        .zip(u_out.par_chunks_mut(RAY_BATCH_PIXELS))
         .enumerate()
-        .map(|(j, (s_px, u_px))| {
-            let i = first + j;
-            if !g.is_hit(i) {
-                return 0;
-            }
-            let (xp, ng) = (g.position[i], g.geo_normal[i]);
-            let (mut s, mut u) = (Vec3::ZERO, Vec3::ZERO);
-            // Created on first use: representatives need no jitter (and no hashing).
-            let mut rng: Option<Rng> = None;
-            let mut rays = 0;
-            for r in reservoirs.pixel(i) {
-                let Some(sample) = r.sample else { continue };
-                let u_k = sample.f * (r.total / r.weight);
-                u += u_k;
-                // No VPL of the sample lights the pixel: nothing to trace.
-                if sample.gain == Vec3::ZERO {
-                    continue;
+        .map_init(
+            || (Vec::new(), Vec::new(), Vec::new()),
+            |(traced, segments, blocked), (c, (s_px, u_px))| {
+                traced.clear();
+                segments.clear();
+                let i0 = first + c * RAY_BATCH_PIXELS;
+                for (j, u_px) in u_px.iter_mut().enumerate() {
+                    let i = i0 + j;
+                    *u_px = Vec3::ZERO;
+                    if !g.is_hit(i) {
+                        continue;
+                    }
+                    let (xp, ng) = (g.position[i], g.geo_normal[i]);
+                    let mut u = Vec3::ZERO;
+                    // Created on first use: representatives need no jitter (and no hashing).
+                    let mut rng: Option<Rng> = None;
+                    for r in reservoirs.pixel(i) {
+                        let Some(sample) = &r.sample else { continue };
+                        let u_k = sample.f * (r.total / r.weight);
+                        u += u_k;
+                        // No VPL of the sample lights the pixel: nothing to trace.
+                        if sample.gain == Vec3::ZERO {
+                            continue;
+                        }
+                        let q = if sample.jitter == Vec3::ZERO {
+                            sample.q
+                        } else {
+                            let rng = rng
+                                .get_or_insert_with(|| Rng::new(&[seed, i as u64, STREAM_JITTER]));
+                            let t = Vec3::new(
+                                raised_cosine(halves(rng.next_u32())),
+                                raised_cosine(halves(rng.next_u32())),
+                                raised_cosine(halves(rng.next_u32())),
+                            );
+                            sample.q + t * sample.jitter
+                        };
+                        traced.push(Traced {
+                            pixel: j,
+                            u_k,
+                            sample,
+                        });
+                        // Points too close for anything between them: a ray that hits nothing.
+                        segments.push(
+                            world
+                                .shadow_segment(xp, ng, q, sample.n.normalize_or_zero())
+                                .unwrap_or_default(),
+                        );
+                    }
+                    *u_px = u / k as f32;
                 }
-                let q = if sample.jitter == Vec3::ZERO {
-                    sample.q
-                } else {
-                    let rng = rng.get_or_insert_with(|| Rng::new(&[seed, i as u64, STREAM_JITTER]));
-                    let t = Vec3::new(
-                        raised_cosine(halves(rng.next_u32())),
-                        raised_cosine(halves(rng.next_u32())),
-                        raised_cosine(halves(rng.next_u32())),
-                    );
-                    sample.q + t * sample.jitter
-                };
-                rays += 1;
-                if !world.occluded_between(xp, ng, q, sample.n.normalize_or_zero()) {
-                    s += u_k * targets.map_or(sample.gain, |t| t.visible_gain(i, &sample));
+                blocked.clear();
+                blocked.resize(segments.len(), false);
+                world.accel.occluded_many(segments, blocked);
+                s_px.fill(Vec3::ZERO);
+                for (t, &hidden) in traced.iter().zip(blocked.iter()) {
+                    if !hidden {
+                        let gain = targets
+                            .map_or(t.sample.gain, |tg| tg.visible_gain(i0 + t.pixel, t.sample));
+                        s_px[t.pixel] += t.u_k * gain;
+                    }
                 }
-            }
-            (*s_px, *u_px) = (s / k as f32, u / k as f32);
-            rays
-        })
+                for s in s_px.iter_mut() {
+                    *s /= k as f32;
+                }
+                traced.len() as u64
+            },
+        )
         .sum()
 }
 

@@ -1,10 +1,17 @@
-//! Ray tracing: a BVH over all triangles with closest-hit and any-hit queries.
+//! Ray tracing: a BVH over all triangles with closest-hit and any-hit queries, for single
+//! rays and for batches, behind one of two backends chosen at run time ([`AccelKind`]).
 //!
-//! The BVH is obvhs's compressed 8-wide BVH (CWBVH, Ylitie et al. 2017), the measured choice
-//! (docs/design.md, "Ray tracing"); nothing outside this module sees which BVH is used.
-//! Two measures from that comparison are applied: each triangle's box is padded by 1e-4 of the scene
-//! size before the build (flat axis-aligned walls otherwise make traversal very slow), and
-//! triangles are stored in BVH leaf order so that the leaf test reads them sequentially.
+//! - **obvhs** (always built): obvhs's compressed 8-wide BVH (CWBVH, Ylitie et al. 2017),
+//!   pure Rust (docs/design.md, "Ray tracing"). Two measures from that comparison are
+//!   applied: each triangle's box is padded by 1e-4 of the scene size before the build (flat
+//!   axis-aligned walls otherwise make traversal very slow), and triangles are stored in BVH
+//!   leaf order so that the leaf test reads them sequentially.
+//! - **Embree 3** (with the cargo feature `embree`, through the `lgh-embree` crate, the one
+//!   crate with unsafe code): single rays through `rtcIntersect1`/`rtcOccluded1`, batches
+//!   through the stream calls. A still scene is built at high quality (spatial splits), a
+//!   mesh rebuilt every frame (moving objects) at low quality.
+//!
+//! Nothing outside this module sees which BVH is used.
 
 use std::time::Duration;
 
@@ -24,25 +31,136 @@ pub struct Hit {
     pub bary: Vec2,
 }
 
-/// The acceleration structure of one scene.
-pub struct Accel {
+/// A ray segment `origin + t dir`, t in (0, `t_max`), with a unit direction: one entry of a
+/// batch ([`Accel::occluded_many`], [`Accel::intersect_many`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Segment {
+    /// Origin.
+    pub origin: Vec3,
+    /// Unit direction.
+    pub dir: Vec3,
+    /// End of the segment.
+    pub t_max: f32,
+}
+
+/// Which ray tracer builds and traverses the BVH.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum AccelKind {
+    /// obvhs's compressed 8-wide BVH (pure Rust, always available).
+    Obvhs,
+    /// Embree 3 (only in builds with the `embree` feature).
+    Embree,
+}
+
+impl AccelKind {
+    /// Embree in builds with the `embree` feature, else obvhs.
+    #[must_use]
+    pub const fn default_kind() -> Self {
+        if cfg!(feature = "embree") {
+            Self::Embree
+        } else {
+            Self::Obvhs
+        }
+    }
+
+    /// The kinds this build can use, the default first.
+    #[must_use]
+    pub fn available() -> Vec<Self> {
+        if cfg!(feature = "embree") {
+            vec![Self::Embree, Self::Obvhs]
+        } else {
+            vec![Self::Obvhs]
+        }
+    }
+
+    /// The name on the command line and in statistics.
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Obvhs => "obvhs",
+            Self::Embree => "embree",
+        }
+    }
+}
+
+/// The `--accel` flag of a command line: which ray tracer, if not the default.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+pub struct AccelChoice {
+    /// Ray tracer: obvhs (pure Rust, always built) or embree (Embree 3, in builds with the
+    /// cargo feature `embree`). Default: embree when built in, else obvhs.
+    #[cfg_attr(feature = "clap", arg(long, value_enum))]
+    pub accel: Option<AccelKind>,
+}
+
+impl AccelChoice {
+    /// The kind chosen, or the default.
+    #[must_use]
+    pub fn kind(&self) -> AccelKind {
+        self.accel.unwrap_or(AccelKind::default_kind())
+    }
+}
+
+impl std::fmt::Display for AccelKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Why a BVH could not be built with the backend asked for.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum AccelError {
+    /// Embree was asked for in a build without the `embree` feature.
+    #[error(
+        "this build of lgh has no Embree: rebuild with `--features embree` (needs libembree-dev)"
+    )]
+    NotBuilt,
+    /// Embree refused or failed.
+    #[error("{0}")]
+    Embree(String),
+}
+
+/// How much a build may spend on quality: a still scene is traced for long, a moving mesh is
+/// rebuilt every frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BuildUse {
+    /// Built once, traced for long: the best traversal.
+    Still,
+    /// Rebuilt every frame: the fastest build.
+    Rebuilt,
+}
+
+/// The obvhs backend's data.
+struct Obvhs {
     bvh: CwBvh,
     tris: Vec<RtTriangle>,
     ids: Vec<u32>,
 }
 
+enum Backend {
+    Obvhs(Obvhs),
+    #[cfg(feature = "embree")]
+    Embree(lgh_embree::Scene),
+}
+
+/// The acceleration structure of one scene.
+pub struct Accel {
+    backend: Backend,
+    len: usize,
+}
+
 impl std::fmt::Debug for Accel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Accel")
-            .field("triangles", &self.tris.len())
+            .field("kind", &self.kind())
+            .field("triangles", &self.len)
             .finish()
     }
 }
 
-impl Accel {
-    /// Builds the BVH over every triangle of `mesh` (in parallel).
-    #[must_use]
-    pub fn build(mesh: &Mesh) -> Self {
+impl Obvhs {
+    fn build(mesh: &Mesh) -> Self {
         let (lo, hi) = mesh.bounds();
         let pad = Vec3A::splat(1e-4 * (hi - lo).max_element().max(1e-6));
         let boxes: Vec<Aabb> = (0..mesh.len())
@@ -67,22 +185,8 @@ impl Accel {
         Self { bvh, tris, ids }
     }
 
-    /// Number of triangles.
-    #[must_use]
-    pub fn len(&self) -> usize {
-        self.tris.len()
-    }
-
-    /// True if there is no triangle.
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        self.tris.is_empty()
-    }
-
-    /// The closest hit along `origin + t dir` for t in (0, `t_max`); `dir` must be unit length.
     #[inline]
-    #[must_use]
-    pub fn intersect(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
+    fn intersect(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
         let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
         let mut hit = obvhs::ray::RayHit::none();
         if self
@@ -101,14 +205,187 @@ impl Accel {
         }
     }
 
+    #[inline]
+    fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
+        !self
+            .bvh
+            .ray_traverse_miss(ray, |r, id| self.tris[id].intersect(r))
+    }
+}
+
+#[cfg(feature = "embree")]
+fn embree_ray(s: &Segment) -> lgh_embree::Ray {
+    lgh_embree::Ray {
+        origin: s.origin.into(),
+        dir: s.dir.into(),
+        t_max: s.t_max,
+    }
+}
+
+#[cfg(feature = "embree")]
+fn from_embree(h: lgh_embree::Hit) -> Hit {
+    Hit {
+        t: h.t,
+        triangle: h.triangle,
+        bary: Vec2::from(h.uv),
+    }
+}
+
+impl Accel {
+    /// Builds the BVH over every triangle of `mesh` (in parallel) with the default backend
+    /// ([`AccelKind::default_kind`]) for a still scene; if Embree cannot start (an old
+    /// processor), with obvhs.
+    #[must_use]
+    pub fn build(mesh: &Mesh) -> Self {
+        Self::build_with(mesh, AccelKind::default_kind(), BuildUse::Still)
+            .unwrap_or_else(|_| Self::obvhs(mesh))
+    }
+
+    /// Builds the BVH over every triangle of `mesh` with the backend `kind`, at the quality
+    /// that suits `usage`.
+    ///
+    /// # Errors
+    /// Embree is not in this build, or refuses the mesh or fails.
+    pub fn build_with(mesh: &Mesh, kind: AccelKind, usage: BuildUse) -> Result<Self, AccelError> {
+        match kind {
+            AccelKind::Obvhs => Ok(Self::obvhs(mesh)),
+            AccelKind::Embree => Self::embree(mesh, usage),
+        }
+    }
+
+    fn obvhs(mesh: &Mesh) -> Self {
+        Self {
+            backend: Backend::Obvhs(Obvhs::build(mesh)),
+            len: mesh.len(),
+        }
+    }
+
+    #[cfg(feature = "embree")]
+    fn embree(mesh: &Mesh, usage: BuildUse) -> Result<Self, AccelError> {
+        let quality = match usage {
+            BuildUse::Still => lgh_embree::BuildQuality::Medium,
+            BuildUse::Rebuilt => lgh_embree::BuildQuality::Low,
+        };
+        let vertices: &[[f32; 3]] = bytemuck::cast_slice(&mesh.positions);
+        let scene = lgh_embree::Scene::new(vertices, &mesh.triangles, quality)
+            .map_err(|e| AccelError::Embree(e.to_string()))?;
+        Ok(Self {
+            backend: Backend::Embree(scene),
+            len: mesh.len(),
+        })
+    }
+
+    #[cfg(not(feature = "embree"))]
+    #[allow(clippy::unnecessary_wraps)]
+    fn embree(_: &Mesh, _: BuildUse) -> Result<Self, AccelError> {
+        Err(AccelError::NotBuilt)
+    }
+
+    /// The backend in use.
+    #[must_use]
+    pub fn kind(&self) -> AccelKind {
+        match self.backend {
+            Backend::Obvhs(_) => AccelKind::Obvhs,
+            #[cfg(feature = "embree")]
+            Backend::Embree(_) => AccelKind::Embree,
+        }
+    }
+
+    /// Number of triangles.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// True if there is no triangle.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The closest hit along `origin + t dir` for t in (0, `t_max`); `dir` must be unit length.
+    #[inline]
+    #[must_use]
+    pub fn intersect(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
+        match &self.backend {
+            Backend::Obvhs(b) => b.intersect(origin, dir, t_max),
+            #[cfg(feature = "embree")]
+            Backend::Embree(s) => s
+                .intersect(&embree_ray(&Segment { origin, dir, t_max }))
+                .map(from_embree),
+        }
+    }
+
     /// True if anything lies on the segment `origin + t dir`, t in (0, `t_max`) (any-hit
     /// query: stops at the first hit found).
     #[inline]
     #[must_use]
     pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
-        !self
-            .bvh
-            .ray_traverse_miss(ray, |r, id| self.tris[id].intersect(r))
+        match &self.backend {
+            Backend::Obvhs(b) => b.occluded(origin, dir, t_max),
+            #[cfg(feature = "embree")]
+            Backend::Embree(s) => s.occluded(&embree_ray(&Segment { origin, dir, t_max })),
+        }
+    }
+
+    /// Occlusion of a batch of segments: `out[i]` = [`Accel::occluded`] of `segments[i]`.
+    /// Embree traces the batch as a stream (`rtcOccluded1M`) in its incoherent mode: the
+    /// coherent mode, which regroups a stream into packets, made the brute force 1.55x
+    /// slower even for one point's rays to many VPLs (docs/performance.md, "Embree").
+    /// Answers are the same as one query at a time.
+    ///
+    /// # Panics
+    /// If `out` is shorter than `segments`.
+    pub fn occluded_many(&self, segments: &[Segment], out: &mut [bool]) {
+        assert!(out.len() >= segments.len(), "one output per segment");
+        match &self.backend {
+            Backend::Obvhs(b) => {
+                for (s, o) in segments.iter().zip(out) {
+                    // An empty segment (the default) is traced by neither backend.
+                    *o = s.t_max > 0.0 && b.occluded(s.origin, s.dir, s.t_max);
+                }
+            }
+            #[cfg(feature = "embree")]
+            Backend::Embree(scene) => {
+                let mut rays = [lgh_embree::Ray::default(); 64];
+                for (segs, out) in segments.chunks(64).zip(out.chunks_mut(64)) {
+                    for (r, s) in rays.iter_mut().zip(segs) {
+                        *r = embree_ray(s);
+                    }
+                    scene.occluded_many(&rays[..segs.len()], false, out);
+                }
+            }
+        }
+    }
+
+    /// Closest hits of a batch of rays: `out[i]` = [`Accel::intersect`] of `rays[i]` (Embree:
+    /// `rtcIntersect1M`, incoherent mode as in [`Accel::occluded_many`]).
+    ///
+    /// # Panics
+    /// If `out` is shorter than `rays`.
+    pub fn intersect_many(&self, rays: &[Segment], out: &mut [Option<Hit>]) {
+        assert!(out.len() >= rays.len(), "one output per ray");
+        match &self.backend {
+            Backend::Obvhs(b) => {
+                for (s, o) in rays.iter().zip(out) {
+                    *o = b.intersect(s.origin, s.dir, s.t_max);
+                }
+            }
+            #[cfg(feature = "embree")]
+            Backend::Embree(scene) => {
+                let mut er = [lgh_embree::Ray::default(); 64];
+                let mut hits = [None; 64];
+                for (segs, out) in rays.chunks(64).zip(out.chunks_mut(64)) {
+                    for (r, s) in er.iter_mut().zip(segs) {
+                        *r = embree_ray(s);
+                    }
+                    scene.intersect_many(&er[..segs.len()], false, &mut hits);
+                    for (o, h) in out.iter_mut().zip(&hits) {
+                        *o = h.map(from_embree);
+                    }
+                }
+            }
+        }
     }
 }

@@ -7,7 +7,7 @@ use lgh_scene::{Camera, Light, Scene};
 pub mod accel;
 pub mod lights;
 
-use accel::Accel;
+use accel::{Accel, AccelError, AccelKind, BuildUse, Segment};
 use lights::LightSet;
 
 /// Everything a frame needs that does not depend on the camera or the settings.
@@ -73,6 +73,19 @@ impl World {
     #[must_use]
     pub fn new(scene: Scene) -> Self {
         let accel = Accel::build(&scene.mesh);
+        Self::with(scene, accel)
+    }
+
+    /// Prepares `scene` as [`World::new`] does, with the ray tracer `kind`.
+    ///
+    /// # Errors
+    /// The backend is not in this build or cannot build the BVH.
+    pub fn with_accel(scene: Scene, kind: AccelKind) -> Result<Self, AccelError> {
+        let accel = Accel::build_with(&scene.mesh, kind, BuildUse::Still)?;
+        Ok(Self::with(scene, accel))
+    }
+
+    fn with(scene: Scene, accel: Accel) -> Self {
         let face_normals = face_normals(&scene.mesh);
         let rest_mesh = (!scene.animation.objects.is_empty()).then(|| scene.mesh.clone());
         let (centre, radius) = scene.bounding_sphere();
@@ -113,7 +126,9 @@ impl World {
         if let Some(rest) = &self.rest_mesh
             && anim.pose_mesh(rest, t, &mut self.scene.mesh)
         {
-            self.accel = Accel::build(&self.scene.mesh);
+            // A moving mesh is rebuilt every frame: the fastest build of the same backend.
+            self.accel = Accel::build_with(&self.scene.mesh, self.accel.kind(), BuildUse::Rebuilt)
+                .unwrap_or_else(|_| Accel::build(&self.scene.mesh));
             self.face_normals = face_normals(&self.scene.mesh);
             self.geometry_id = next_geometry_id();
         }
@@ -191,13 +206,23 @@ impl World {
     #[inline]
     #[must_use]
     pub fn occluded_between(&self, a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> bool {
+        self.shadow_segment(a, na, b, nb)
+            .is_some_and(|s| self.accel.occluded(s.origin, s.dir, s.t_max))
+    }
+
+    /// The shadow ray of [`World::occluded_between`], for batches ([`Accel::occluded_many`]);
+    /// `None` when the two points are too close for anything to lie between them.
+    #[inline]
+    #[must_use]
+    pub fn shadow_segment(&self, a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> Option<Segment> {
         let o = self.offset(a, na, b - a);
         let e = self.offset(b, nb, a - b);
         let d = e - o;
         let len = d.length();
-        if len <= self.ray_epsilon {
-            return false;
-        }
-        self.accel.occluded(o, d / len, len * (1.0 - 1e-4))
+        (len > self.ray_epsilon).then(|| Segment {
+            origin: o,
+            dir: d / len,
+            t_max: len * (1.0 - 1e-4),
+        })
     }
 }

@@ -7,6 +7,8 @@ mod common;
 mod convergence;
 mod determinism;
 mod direct_light;
+#[cfg(feature = "embree")]
+mod embree;
 mod formats;
 mod hostile;
 mod ism;

@@ -18,6 +18,7 @@ use crate::passes::per_pixel;
 use crate::progress::Progress;
 use crate::settings::RenderError;
 use crate::world::World;
+use crate::world::accel::Segment;
 
 /// Every pixel sums every VPL with an exact shadow ray (the reference).
 pub const BRUTE: Method = Method::new(&Brute { shadowed: true });
@@ -67,6 +68,61 @@ impl IndirectMethod for Brute {
     }
 }
 
+/// Contributions to one point waiting for their shadow rays, traced together (Embree traces
+/// a batch as a stream) and added to the point's sum one by one in the order they came, so
+/// that the sum is the same as without batches.
+struct ShadowBatch {
+    contribution: [Vec3; BATCH],
+    /// The shadow ray, `None` when the points are too close for anything between them.
+    segment: [Option<Segment>; BATCH],
+    len: usize,
+}
+
+/// Shadow rays per batch.
+const BATCH: usize = 64;
+
+impl Default for ShadowBatch {
+    fn default() -> Self {
+        Self {
+            contribution: [Vec3::ZERO; BATCH],
+            segment: [None; BATCH],
+            len: 0,
+        }
+    }
+}
+
+impl ShadowBatch {
+    /// Adds a contribution and its shadow ray; true when the batch is full.
+    #[inline]
+    fn push(&mut self, c: Vec3, s: Option<Segment>) -> bool {
+        self.contribution[self.len] = c;
+        self.segment[self.len] = s;
+        self.len += 1;
+        self.len == BATCH
+    }
+
+    /// Traces the batch and adds its visible contributions to `e`, in order.
+    fn flush(&mut self, world: &World, e: &mut Vec3) {
+        let n = std::mem::take(&mut self.len);
+        let mut rays = [Segment::default(); BATCH];
+        let mut m = 0;
+        for s in self.segment[..n].iter().flatten() {
+            rays[m] = *s;
+            m += 1;
+        }
+        let mut blocked = [false; BATCH];
+        world.accel.occluded_many(&rays[..m], &mut blocked);
+        let mut r = 0;
+        for (c, s) in self.contribution[..n].iter().zip(&self.segment[..n]) {
+            let hidden = s.is_some() && blocked[r];
+            r += usize::from(s.is_some());
+            if !hidden {
+                *e += *c;
+            }
+        }
+    }
+}
+
 /// Indirect radiance towards the camera for every pixel, from all `vpls`.
 ///
 /// `eps` clamps 1/d^2 as 1/(d^2 + eps^2). With `shadows` false no shadow ray is traced
@@ -87,6 +143,7 @@ pub fn render_brute(
             return Vec3::ZERO;
         }
         let (x, n, ng) = (g.position[i], g.normal[i], g.geo_normal[i]);
+        let mut batch = ShadowBatch::default();
         let mut e = Vec3::ZERO;
         for j in 0..vpls.len() {
             let p = vpls.positions[j];
@@ -95,11 +152,15 @@ pub fn render_brute(
             if c == Vec3::ZERO {
                 continue;
             }
-            if shadows && world.occluded_between(x, ng, p, nv) {
+            if !shadows {
+                e += c;
                 continue;
             }
-            e += c;
+            if batch.push(c, world.shadow_segment(x, ng, p, nv)) {
+                batch.flush(world, &mut e);
+            }
         }
+        batch.flush(world, &mut e);
         g.albedo[i] * FRAC_1_PI * e
     });
     progress.end();
