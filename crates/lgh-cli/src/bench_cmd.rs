@@ -7,7 +7,7 @@ use clap::builder::TypedValueParser;
 use clap::{Args, Subcommand};
 use lgh_render::World;
 use lgh_render::raybench::{RayBench, bench_rays};
-use lgh_render::world::accel::AccelKind;
+use lgh_render::world::accel::{AccelChoice, AccelKind};
 
 use crate::scene_arg::load_scene;
 
@@ -26,6 +26,9 @@ pub struct BenchOptions {
     /// Print one JSON object instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// The ray tracer (`bench rays`: measure only this one).
+    #[command(flatten)]
+    pub accel: AccelChoice,
 }
 
 impl BenchOptions {
@@ -38,15 +41,18 @@ impl BenchOptions {
     }
 }
 
-/// The scene of a benchmark (the built-in Cornell box if none is given), prepared, with its
-/// name.
+/// The scene of a benchmark (the built-in Cornell box if none is given), prepared with the
+/// options' ray tracer, with its name.
 ///
 /// # Errors
-/// The scene cannot be loaded.
-pub fn open_scene(path: Option<&std::path::Path>) -> Result<(String, World)> {
+/// The scene cannot be loaded, or the ray tracer is not in this build.
+pub fn open_scene(
+    path: Option<&std::path::Path>,
+    options: &BenchOptions,
+) -> Result<(String, World)> {
     let scene = load_scene(path)?;
     let name = scene.name.clone();
-    Ok((name, World::new(scene)))
+    Ok((name, World::with_accel(scene, options.accel.kind())?))
 }
 
 /// Measure performance.
@@ -96,10 +102,6 @@ pub struct RaysArgs {
     /// Rays of each kind (at most 100 million).
     #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(1..=100_000_000).map(|v| v as usize))]
     pub rays: usize,
-    /// Ray tracers to measure, alternated in each round (obvhs, embree). Default: every one
-    /// this build has.
-    #[arg(long, value_enum, value_delimiter = ',')]
-    pub accel: Vec<AccelKind>,
     /// Rounds (each measures every ray tracer once; the medians are reported).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100).map(|v| v as usize))]
     pub rounds: usize,
@@ -125,10 +127,10 @@ fn rays(args: &RaysArgs) -> Result<()> {
     let threads = args.options.threads()?;
     let scene = load_scene(args.scene.as_deref())?;
     let name = scene.name.clone();
-    let kinds = if args.accel.is_empty() {
-        AccelKind::available()
-    } else {
-        args.accel.clone()
+    // Every ray tracer this build has, alternated, unless --accel names one.
+    let kinds = match args.options.accel.accel {
+        None => AccelKind::available(),
+        Some(k) => vec![k],
     };
     // One world per ray tracer; the rounds alternate them, so that a change of the machine's
     // speed during the run affects both alike.

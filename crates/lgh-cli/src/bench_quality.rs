@@ -236,7 +236,7 @@ pub fn run(args: &QualityBenchArgs) -> Result<()> {
     let mut points = Vec::new();
     let mut scene_names = Vec::new();
     for path in &scenes {
-        let (name, world) = open_scene(Some(path))?;
+        let (name, world) = open_scene(Some(path), &args.options)?;
         let exposure = world.scene.exposure;
         let base = indirect_only(args.size, args.vpls);
         if !args.options.json {

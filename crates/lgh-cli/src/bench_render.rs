@@ -54,7 +54,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
         anyhow::bail!("--interleave {n}: expected 1 to 16");
     }
     let threads = args.options.threads()?;
-    let (name, world) = crate::bench_cmd::open_scene(args.scene.as_deref())?;
+    let (name, world) = crate::bench_cmd::open_scene(args.scene.as_deref(), &args.options)?;
     let (w, h) = args.size;
     let frame = world.scene.camera().frame(w, h);
     // The G-buffer too is timed over `runs` renders; like the frames after the first, the

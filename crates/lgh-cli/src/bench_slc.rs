@@ -88,7 +88,7 @@ fn row(
 
 pub fn run(args: &SlcBenchArgs) -> Result<()> {
     let threads = args.options.threads()?;
-    let (name, world) = crate::bench_cmd::open_scene(args.scene.as_deref())?;
+    let (name, world) = crate::bench_cmd::open_scene(args.scene.as_deref(), &args.options)?;
     let base = RenderSettings {
         width: args.size.0,
         height: args.size.1,

@@ -66,7 +66,7 @@ fn run_one(
 
 pub fn run(args: &TemporalBenchArgs) -> Result<()> {
     let threads = args.options.threads()?;
-    let (name, world) = crate::bench_cmd::open_scene(args.scene.as_deref())?;
+    let (name, world) = crate::bench_cmd::open_scene(args.scene.as_deref(), &args.options)?;
     let base = RenderSettings {
         width: args.size.0,
         height: args.size.1,

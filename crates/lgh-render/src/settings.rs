@@ -443,6 +443,9 @@ pub enum RenderError {
     /// The VPLs could not form a lighting grid hierarchy.
     #[error("lighting grid hierarchy: {0}")]
     Grid(#[from] GridError),
+    /// A backend outside this crate (the GPU) could not run the method, with its message.
+    #[error("{0}")]
+    Backend(String),
 }
 
 #[cfg(test)]
