@@ -3,7 +3,7 @@
 //!
 //! This is the one crate of the workspace that holds unsafe code (the project's decision:
 //! every other crate keeps `forbid(unsafe_code)`). It declares the dozen C functions it calls
-//! in [`sys`](crate) by hand, so that each declaration can be read against the header, and
+//! in `sys.rs` by hand, so that each declaration can be read against the header, and
 //! exposes a triangle [`Scene`] with closest-hit and occlusion queries for single rays and
 //! for streams of rays. How it is kept sound:
 //!

@@ -291,38 +291,30 @@ impl Scene {
             }
             return;
         }
-        let mut buf = [sys::RtcRay::default(); STREAM];
         let flag = context_flag(coherent);
-        for (rays, out) in rays.chunks(STREAM).zip(out.chunks_mut(STREAM)) {
-            let mut m = 0;
-            let mut slot = [0u8; STREAM];
-            for (i, r) in rays.iter().enumerate() {
-                out[i] = false;
-                if let Some(r) = rtc_ray(r) {
-                    buf[m] = r;
-                    slot[m] = i as u8;
-                    m += 1;
-                }
-            }
-            if m == 0 {
-                continue;
-            }
+        let trace = |buf: &mut [sys::RtcRay]| {
             let mut ctx = sys::RtcIntersectContext::new(flag);
             // SAFETY: a committed scene (thread-safe queries), an initialised context, and
-            // `m` <= 64 valid contiguous ray records of 48 bytes each (the stride given).
+            // `buf.len()` <= 64 valid contiguous ray records of 48 bytes each (the stride
+            // given).
             unsafe {
                 sys::rtcOccluded1M(
                     self.handle,
                     &mut ctx,
                     buf.as_mut_ptr(),
-                    m as c_uint,
+                    buf.len() as c_uint,
                     std::mem::size_of::<sys::RtcRay>(),
                 );
             }
-            for (r, &i) in buf[..m].iter().zip(&slot[..m]) {
-                out[usize::from(i)] = r.tfar == f32::NEG_INFINITY;
-            }
-        }
+        };
+        stream(
+            rays,
+            out,
+            false,
+            |r| r,
+            trace,
+            |r| r.tfar == f32::NEG_INFINITY,
+        );
     }
 
     /// Closest hits of many rays at once through Embree's stream call (`rtcIntersect1M`, 64
@@ -338,38 +330,52 @@ impl Scene {
             }
             return;
         }
-        let mut buf = [sys::RtcRayHit::default(); STREAM];
         let flag = context_flag(coherent);
-        for (rays, out) in rays.chunks(STREAM).zip(out.chunks_mut(STREAM)) {
-            let mut m = 0;
-            let mut slot = [0u8; STREAM];
-            for (i, r) in rays.iter().enumerate() {
-                out[i] = None;
-                if let Some(r) = rtc_ray(r) {
-                    buf[m] = sys::RtcRayHit {
-                        ray: r,
-                        hit: NO_HIT,
-                    };
-                    slot[m] = i as u8;
-                    m += 1;
-                }
-            }
-            if m == 0 {
-                continue;
-            }
+        let trace = |buf: &mut [sys::RtcRayHit]| {
             let mut ctx = sys::RtcIntersectContext::new(flag);
-            // SAFETY: as in `occluded_many`, with `m` ray/hit records of 80 bytes each.
+            // SAFETY: as in `occluded_many`, with `buf.len()` ray/hit records of 80 bytes each.
             unsafe {
                 sys::rtcIntersect1M(
                     self.handle,
                     &mut ctx,
                     buf.as_mut_ptr(),
-                    m as c_uint,
+                    buf.len() as c_uint,
                     std::mem::size_of::<sys::RtcRayHit>(),
                 );
             }
-            for (rh, &i) in buf[..m].iter().zip(&slot[..m]) {
-                out[usize::from(i)] = hit_of(rh);
+        };
+        let record = |ray| sys::RtcRayHit { ray, hit: NO_HIT };
+        stream(rays, out, None, record, trace, hit_of);
+    }
+}
+
+/// Streams `rays` through `trace` 64 at a time: the rays Embree may see are made into
+/// records (`record`) and packed, `trace` runs over the packed records, and each ray's
+/// answer is read from its record (`answer`); the others get `miss`.
+fn stream<R: Copy + Default, T: Copy>(
+    rays: &[Ray],
+    out: &mut [T],
+    miss: T,
+    record: impl Fn(sys::RtcRay) -> R,
+    trace: impl Fn(&mut [R]),
+    answer: impl Fn(&R) -> T,
+) {
+    let mut buf = [R::default(); STREAM];
+    for (rays, out) in rays.chunks(STREAM).zip(out.chunks_mut(STREAM)) {
+        let mut m = 0;
+        let mut slot = [0u8; STREAM];
+        for (i, r) in rays.iter().enumerate() {
+            out[i] = miss;
+            if let Some(r) = rtc_ray(r) {
+                buf[m] = record(r);
+                slot[m] = i as u8;
+                m += 1;
+            }
+        }
+        if m > 0 {
+            trace(&mut buf[..m]);
+            for (r, &i) in buf[..m].iter().zip(&slot[..m]) {
+                out[usize::from(i)] = answer(r);
             }
         }
     }
