@@ -8,6 +8,15 @@ use lgh_render::RenderSettings;
 use lgh_render::denoise::temporal::TemporalSettings;
 pub use lgh_render::settings::parse_size;
 
+/// Where a frame's indirect light is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Device {
+    /// The CPU (every method).
+    Cpu,
+    /// The GPU through wgpu (the methods ported so far).
+    Gpu,
+}
+
 /// Render a scene to an image.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -36,6 +45,11 @@ pub struct RenderArgs {
     /// The ray tracer.
     #[command(flatten)]
     pub accel: lgh_render::world::accel::AccelChoice,
+    /// Where the indirect light is computed: cpu, or gpu (wgpu compute shaders on a Vulkan,
+    /// Metal or DX12 adapter; so far the brute-force methods brute and brute-unshadowed; the
+    /// G-buffer, VPLs and direct light stay on the CPU).
+    #[arg(long, value_enum, default_value_t = Device::Cpu)]
+    pub device: Device,
     /// Render N frames of the (static) view with independent VPL sets (seeds derived from
     /// --seed; for lgh also a random grid offset each) and write their mean: a progressive
     /// render that converges as N grows. For brute it is the brute force over the union of

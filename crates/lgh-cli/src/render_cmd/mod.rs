@@ -100,8 +100,17 @@ fn run_sequence(
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     check_args(args)?;
-    let settings = args.render_settings();
+    let mut settings = args.render_settings();
     settings.validate()?;
+    if args.device == args::Device::Gpu {
+        let name = settings.method.name();
+        settings.method = lgh_gpu::gpu_method(settings.method)
+            .ok_or_else(|| lgh_gpu::GpuError::NotPorted(name.to_owned()))?;
+        let ctx = lgh_gpu::GpuContext::shared()?;
+        if !args.quiet {
+            eprintln!("GPU: {}", ctx.adapter_name());
+        }
+    }
     for w in settings.warnings() {
         eprintln!("warning: {w}");
     }

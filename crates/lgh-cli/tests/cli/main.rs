@@ -1,6 +1,7 @@
 //! The command line as a user meets it: successful renders and every kind of bad input.
 
 mod accel;
+mod gpu;
 mod hardening;
 mod view;
 

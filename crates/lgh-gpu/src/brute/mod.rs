@@ -1,0 +1,176 @@
+//! The brute-force reference on the GPU (`shaders/brute.wgsl`): every pixel sums every VPL,
+//! with an exact shadow ray per VPL traced through the BVH in compute, as lgh-render's
+//! `brute` does on the CPU (the same formula, offsets and clamp; docs/design.md, "Clamps").
+//! It checks the GPU's rays and shading against the CPU's.
+//!
+//! VPLs go to the GPU in chunks, one dispatch each, so that no single dispatch runs long
+//! enough for a desktop driver's watchdog; each pixel adds its chunk sums in chunk order, so
+//! the image is the same from run to run.
+
+use std::f32::consts::FRAC_1_PI;
+
+use glam::{Vec3, Vec4};
+use lgh_render::memory::FrameMemory;
+use lgh_render::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
+use lgh_render::settings::RenderError;
+
+use crate::context::{GpuContext, GpuError};
+use crate::scene::GpuScene;
+
+/// Every pixel sums every VPL with an exact shadow ray, on the GPU.
+pub const BRUTE_GPU: Method = Method::new(&GpuBrute { shadowed: true });
+/// Every pixel sums every VPL without shadow rays, on the GPU.
+pub const BRUTE_UNSHADOWED_GPU: Method = Method::new(&GpuBrute { shadowed: false });
+
+/// Pixel-VPL pairs per dispatch at most (about 0.1 s of work on a current GPU).
+const PAIRS_PER_DISPATCH: usize = 1 << 28;
+
+/// VPLs per dispatch at most. On lavapipe (Mesa 22.3) an invocation that traced more than
+/// about 1,000 shadow rays in one dispatch lost part of its sum (the image came out up to
+/// 26% dark), while the same work in dispatches of up to 1,000 VPLs was exact; the cause is
+/// not found (docs/design.md, "GPU").
+const MAX_VPLS_PER_DISPATCH: usize = 256;
+
+struct GpuBrute {
+    shadowed: bool,
+}
+
+/// `Params` of the shader.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    pixels: u32,
+    first_vpl: u32,
+    vpl_count: u32,
+    shadows: u32,
+    eps2: f32,
+    ray_eps: f32,
+    _pad: [u32; 2],
+}
+
+impl IndirectMethod for GpuBrute {
+    fn name(&self) -> &'static str {
+        if self.shadowed {
+            "brute"
+        } else {
+            "brute-unshadowed"
+        }
+    }
+
+    fn about(&self) -> &'static str {
+        "Every pixel sums every VPL (with an exact shadow ray each unless unshadowed), on the GPU"
+    }
+
+    fn render(&self, i: &MethodInputs, _: &mut FrameMemory) -> Result<MethodOutput, RenderError> {
+        let fail = |e: GpuError| RenderError::Backend(e.to_string());
+        let ctx = GpuContext::shared().map_err(fail)?;
+        let irradiance = render_brute(ctx, i, self.shadowed).map_err(fail)?;
+        let g = i.gbuffer;
+        let radiance = irradiance
+            .iter()
+            .zip(&g.albedo)
+            .enumerate()
+            .map(|(p, (e, a))| {
+                if g.is_hit(p) {
+                    *a * FRAC_1_PI * e.truncate()
+                } else {
+                    Vec3::ZERO
+                }
+            })
+            .collect();
+        Ok(MethodOutput {
+            radiance,
+            ..MethodOutput::default()
+        })
+    }
+}
+
+/// The shader's module: the kernel and the BVH traversal it calls.
+fn module(ctx: &GpuContext) -> wgpu::ShaderModule {
+    ctx.device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("brute"),
+            source: wgpu::ShaderSource::Wgsl(source().into()),
+        })
+}
+
+/// The WGSL source of the kernel (with the BVH traversal).
+#[must_use]
+pub fn source() -> String {
+    [
+        include_str!("../shaders/brute.wgsl"),
+        include_str!("../shaders/bvh.wgsl"),
+    ]
+    .concat()
+}
+
+/// Irradiance sums E (the sum of every VPL's unshadowed or shadowed irradiance) per pixel.
+fn render_brute(ctx: &GpuContext, i: &MethodInputs, shadows: bool) -> Result<Vec<Vec4>, GpuError> {
+    let (g, vpls) = (i.gbuffer, i.vpls);
+    let n = g.len();
+    let scene = GpuScene::new(ctx, &i.world.scene.mesh)?;
+    let pixels: Vec<[Vec4; 4]> = (0..n)
+        .map(|p| {
+            [
+                g.position[p].extend(if g.is_hit(p) { 1.0 } else { 0.0 }),
+                g.normal[p].extend(0.0),
+                g.geo_normal[p].extend(0.0),
+                g.albedo[p].extend(0.0),
+            ]
+        })
+        .collect();
+    let vpl_data: Vec<[Vec4; 3]> = (0..vpls.len())
+        .map(|j| {
+            [
+                vpls.positions[j].extend(1.0),
+                vpls.normals[j].extend(0.0),
+                vpls.flux[j].extend(0.0),
+            ]
+        })
+        .collect();
+    let gbuffer = ctx.storage("g-buffer", &pixels)?;
+    let vpl_buf = ctx.storage("vpls", &vpl_data)?;
+    let out = ctx.storage("irradiance", &vec![Vec4::ZERO; n])?;
+    let params = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("brute params"),
+        size: std::mem::size_of::<Params>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let pipeline = ctx
+        .device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("brute"),
+            layout: None,
+            module: &module(ctx),
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+    let bind = ctx.bind_group(
+        &pipeline,
+        &[&params, &scene.nodes, &scene.tris, &gbuffer, &vpl_buf, &out],
+    );
+    let chunk = (PAIRS_PER_DISPATCH / n.max(1)).clamp(1, MAX_VPLS_PER_DISPATCH);
+    let eps = i.eps();
+    i.progress.begin(
+        "indirect (brute force, GPU)",
+        vpls.len().div_ceil(chunk) as u64,
+    );
+    for first in (0..vpls.len()).step_by(chunk) {
+        let p = Params {
+            pixels: n as u32,
+            first_vpl: first as u32,
+            vpl_count: chunk.min(vpls.len() - first) as u32,
+            shadows: u32::from(shadows),
+            eps2: eps * eps,
+            ray_eps: i.world.ray_epsilon,
+            _pad: [0; 2],
+        };
+        ctx.queue.write_buffer(&params, 0, bytemuck::bytes_of(&p));
+        ctx.dispatch(&pipeline, &bind, n)?;
+        i.progress.advance(1);
+    }
+    i.progress.end();
+    ctx.read_back(&out, n)
+}

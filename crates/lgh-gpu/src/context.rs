@@ -1,0 +1,223 @@
+//! The adapter, device and queue the GPU passes run on.
+
+use std::sync::OnceLock;
+
+/// Why the GPU backend cannot run.
+#[derive(Clone, Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter: no Vulkan, Metal or DX12 driver (on Linux without a GPU, Mesa's lavapipe
+    /// provides one: Debian's `mesa-vulkan-drivers`).
+    #[error(
+        "no GPU adapter found: --device gpu needs a Vulkan, Metal or DX12 driver (without a GPU, Mesa's lavapipe: apt-get install mesa-vulkan-drivers)"
+    )]
+    NoAdapter,
+    /// The adapter refused a device.
+    #[error("the GPU adapter {adapter} refused a device: {why}")]
+    Device {
+        /// The adapter's name.
+        adapter: String,
+        /// wgpu's message.
+        why: String,
+    },
+    /// The scene or the frame does not fit the adapter's limits.
+    #[error("{0}")]
+    TooLarge(String),
+    /// The GPU failed during the work (device lost, out of memory, a validation error).
+    #[error("the GPU failed: {0}")]
+    Failed(String),
+    /// This method has no GPU version yet.
+    #[error(
+        "--method {0} does not run on the GPU yet (--device gpu runs: brute, brute-unshadowed)"
+    )]
+    NotPorted(String),
+}
+
+/// A wgpu device and queue with what was learnt of the adapter.
+#[derive(Debug)]
+pub struct GpuContext {
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// The adapter: name, backend, driver.
+    pub info: wgpu::AdapterInfo,
+    /// The limits the device was created with (the adapter's own).
+    pub limits: wgpu::Limits,
+}
+
+impl GpuContext {
+    /// Opens the adapter wgpu prefers (a discrete GPU before an integrated one before a CPU
+    /// implementation such as lavapipe), with its full limits. `WGPU_BACKEND` (e.g. `vulkan`)
+    /// and `WGPU_ADAPTER_NAME` (a substring, e.g. `llvmpipe`) narrow the choice.
+    ///
+    /// # Errors
+    /// No adapter, or it refuses a device.
+    pub fn new() -> Result<Self, GpuError> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pollster::block_on(wgpu::util::initialize_adapter_from_env_or_default(
+            &instance, None,
+        ))
+        .map_err(|_| GpuError::NoAdapter)?;
+        let info = adapter.get_info();
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("lgh"),
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device {
+            adapter: info.name.clone(),
+            why: e.to_string(),
+        })?;
+        Ok(Self {
+            device,
+            queue,
+            info,
+            limits,
+        })
+    }
+
+    /// The process's context, opened on first use (an adapter is costly to open, and one is
+    /// enough for every frame).
+    ///
+    /// # Errors
+    /// As [`GpuContext::new`], every time, if the first opening failed.
+    pub fn shared() -> Result<&'static Self, GpuError> {
+        static SHARED: OnceLock<Result<GpuContext, GpuError>> = OnceLock::new();
+        SHARED.get_or_init(Self::new).as_ref().map_err(Clone::clone)
+    }
+
+    /// A one-line description of the adapter, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)".
+    #[must_use]
+    pub fn adapter_name(&self) -> String {
+        format!("{} ({:?})", self.info.name, self.info.backend)
+    }
+
+    /// A storage buffer of `data`, refused if larger than the adapter allows.
+    ///
+    /// # Errors
+    /// Larger than `max_storage_buffer_binding_size`.
+    pub fn storage<T: bytemuck::Pod>(
+        &self,
+        label: &str,
+        data: &[T],
+    ) -> Result<wgpu::Buffer, GpuError> {
+        use wgpu::util::DeviceExt;
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let max = self.limits.max_storage_buffer_binding_size;
+        if bytes.len() as u64 > max {
+            return Err(GpuError::TooLarge(format!(
+                "{label}: {} MB exceed the adapter's largest storage buffer ({} MB)",
+                bytes.len() >> 20,
+                max >> 20
+            )));
+        }
+        // An empty binding is not allowed: one zero element stands for none.
+        let zero = [0u8; 16];
+        let contents = if bytes.is_empty() { &zero[..] } else { bytes };
+        Ok(self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
+            }))
+    }
+
+    /// The bind group of `pipeline`'s group 0 with `buffers` at bindings 0, 1, ...
+    #[must_use]
+    pub fn bind_group(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        buffers: &[&wgpu::Buffer],
+    ) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        })
+    }
+
+    /// Runs `pipeline` over `invocations` threads (workgroups of 64) and waits for it.
+    ///
+    /// # Errors
+    /// More workgroups than one dispatch allows, or the GPU failed.
+    pub fn dispatch(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        bind: &wgpu::BindGroup,
+        invocations: usize,
+    ) -> Result<(), GpuError> {
+        let groups = u32::try_from(invocations.div_ceil(64))
+            .ok()
+            .filter(|&x| x <= self.limits.max_compute_workgroups_per_dimension)
+            .ok_or_else(|| {
+                GpuError::TooLarge(format!("{invocations} invocations exceed one dispatch"))
+            })?;
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, bind, &[]);
+            pass.dispatch_workgroups(groups, 1, 1);
+        }
+        self.queue.submit([enc.finish()]);
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Failed(e.to_string()))
+    }
+
+    /// Copies `buffer` (`len` elements of `T`) back to the CPU and waits for it.
+    ///
+    /// # Errors
+    /// The GPU failed.
+    pub fn read_back<T: bytemuck::Pod>(
+        &self,
+        buffer: &wgpu::Buffer,
+        len: usize,
+    ) -> Result<Vec<T>, GpuError> {
+        let size = (len * std::mem::size_of::<T>()) as u64;
+        if size == 0 {
+            return Ok(Vec::new());
+        }
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("read back"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        self.queue.submit([enc.finish()]);
+        let slice = staging.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Failed(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| GpuError::Failed(e.to_string()))?
+            .map_err(|e| GpuError::Failed(e.to_string()))?;
+        let view = slice
+            .get_mapped_range()
+            .map_err(|e| GpuError::Failed(e.to_string()))?;
+        let out = bytemuck::cast_slice(&view).to_vec();
+        drop(view);
+        staging.unmap();
+        Ok(out)
+    }
+}

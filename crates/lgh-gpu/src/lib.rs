@@ -1,0 +1,31 @@
+//! The GPU backend of lgh: the frame's passes as wgpu compute shaders (WGSL), on any adapter
+//! wgpu finds (Vulkan, Metal, DX12; Mesa's lavapipe on a machine without a GPU).
+//!
+//! This is the first milestone of the backend (issue 35): a [`GpuContext`] (adapter, device,
+//! queue), the scene uploaded with a BVH built on the CPU ([`GpuScene`]: obvhs's binary BVH,
+//! flattened, traversed in compute: no ray-tracing hardware is needed), and the brute-force
+//! reference ([`brute::BRUTE_GPU`], [`brute::BRUTE_UNSHADOWED_GPU`]), which checks the GPU's
+//! rays and shading against the CPU's. The other passes of the LGH frame run on the CPU.
+//!
+//! The GPU methods are [`lgh_render::Method`]s like the CPU's: `render_frame` runs them with
+//! the same settings and gives the same `Frame`. Results are deterministic: every pixel sums
+//! its own terms in a fixed order (no float atomics).
+
+mod context;
+pub mod scene;
+
+pub mod brute;
+pub mod rays;
+
+pub use context::{GpuContext, GpuError};
+pub use scene::GpuScene;
+
+/// The GPU method standing for the CPU method `method`, if it has been ported.
+#[must_use]
+pub fn gpu_method(method: lgh_render::Method) -> Option<lgh_render::Method> {
+    match method.name() {
+        "brute" => Some(brute::BRUTE_GPU),
+        "brute-unshadowed" => Some(brute::BRUTE_UNSHADOWED_GPU),
+        _ => None,
+    }
+}

@@ -1,0 +1,114 @@
+//! The scene on the GPU: triangles and a binary BVH built on the CPU (obvhs's BVH2, the same
+//! builder family as the CPU's tracer), flattened for traversal in compute
+//! (`shaders/bvh.wgsl`).
+
+use glam::{Vec3, Vec3A, Vec4};
+use obvhs::BvhBuildParams;
+use obvhs::aabb::Aabb;
+
+use crate::context::{GpuContext, GpuError};
+
+/// Deepest BVH the traversal's stack holds (`STACK` in `shaders/bvh.wgsl`).
+pub const MAX_DEPTH: usize = 48;
+
+/// One flattened BVH node, as `Node` in `shaders/bvh.wgsl` (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuNode {
+    /// Box minimum.
+    pub lo: [f32; 3],
+    /// Triangles in a leaf, 0 for an inner node.
+    pub count: u32,
+    /// Box maximum.
+    pub hi: [f32; 3],
+    /// Inner node: the first of its two children; leaf: its first triangle (in leaf order).
+    pub first: u32,
+}
+
+/// The scene's triangles and BVH in GPU buffers.
+#[derive(Debug)]
+pub struct GpuScene {
+    /// BVH nodes (root first).
+    pub nodes: wgpu::Buffer,
+    /// Triangles in leaf order, three `vec4` corners each.
+    pub tris: wgpu::Buffer,
+    /// Number of triangles.
+    pub triangles: usize,
+}
+
+/// The flattened BVH and triangles of `mesh` (CPU side, for upload and tests).
+///
+/// # Errors
+/// The BVH is deeper than the shader's stack ([`MAX_DEPTH`]).
+pub fn flatten(mesh: &lgh_scene::Mesh) -> Result<(Vec<GpuNode>, Vec<Vec4>), GpuError> {
+    if mesh.is_empty() {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    // The CPU tracer's padding (lgh-render world/accel.rs): flat walls otherwise give boxes of
+    // zero thickness.
+    let (lo, hi) = mesh.bounds();
+    let pad = Vec3A::splat(1e-4 * (hi - lo).max_element().max(1e-6));
+    let boxes: Vec<Aabb> = (0..mesh.len())
+        .map(|t| {
+            let [a, b, c] = mesh.vertices(t).map(Vec3A::from);
+            Aabb::new(a.min(b).min(c) - pad, a.max(b).max(c) + pad)
+        })
+        .collect();
+    let bvh = obvhs::bvh2::builder::build_bvh2(
+        &boxes,
+        BvhBuildParams::medium_build(),
+        &mut std::time::Duration::default(),
+    );
+    let nodes: Vec<GpuNode> = bvh
+        .nodes
+        .iter()
+        .map(|n| GpuNode {
+            lo: Vec3::from(n.aabb.min).into(),
+            count: n.prim_count,
+            hi: Vec3::from(n.aabb.max).into(),
+            first: n.first_index,
+        })
+        .collect();
+    let depth = depth(&nodes);
+    if depth > MAX_DEPTH {
+        return Err(GpuError::TooLarge(format!(
+            "the scene's BVH is {depth} levels deep; the GPU traversal holds {MAX_DEPTH}"
+        )));
+    }
+    let tris = bvh
+        .primitive_indices
+        .iter()
+        .flat_map(|&i| mesh.vertices(i as usize).map(|v| v.extend(0.0)))
+        .collect();
+    Ok((nodes, tris))
+}
+
+/// Depth of the tree (the root alone: 1).
+fn depth(nodes: &[GpuNode]) -> usize {
+    let mut deepest = 0;
+    let mut todo = vec![(0usize, 1usize)];
+    while let Some((i, d)) = todo.pop() {
+        deepest = deepest.max(d);
+        let n = nodes[i];
+        if n.count == 0 {
+            todo.push((n.first as usize, d + 1));
+            todo.push((n.first as usize + 1, d + 1));
+        }
+    }
+    deepest
+}
+
+impl GpuScene {
+    /// Builds the BVH of `mesh` on the CPU and uploads it with the triangles.
+    ///
+    /// # Errors
+    /// The BVH is too deep, or a buffer exceeds the adapter's limits.
+    pub fn new(ctx: &GpuContext, mesh: &lgh_scene::Mesh) -> Result<Self, GpuError> {
+        let (nodes, tris) = flatten(mesh)?;
+        Ok(Self {
+            nodes: ctx.storage("bvh nodes", &nodes)?,
+            tris: ctx.storage("triangles", &tris)?,
+            triangles: mesh.len(),
+        })
+    }
+}

@@ -1,0 +1,118 @@
+// Any-hit traversal of a binary BVH (obvhs's BVH2, flattened on the CPU: an inner node's
+// children are nodes[first] and nodes[first + 1], a leaf holds `count` triangles from
+// `first` in leaf order) and the Moller-Trumbore triangle test. Included by the kernels
+// that trace shadow rays.
+
+struct Node {
+    lo: vec3<f32>,
+    count: u32,
+    hi: vec3<f32>,
+    first: u32,
+}
+
+// The slab test: the entry distance of the ray into the box, or a huge value if it misses
+// the box within (0, t_max).
+fn box_entry(lo: vec3<f32>, hi: vec3<f32>, o: vec3<f32>, inv_d: vec3<f32>, t_max: f32) -> f32 {
+    let t0 = (lo - o) * inv_d;
+    let t1 = (hi - o) * inv_d;
+    let tn = max(max(min(t0.x, t1.x), min(t0.y, t1.y)), max(min(t0.z, t1.z), 0.0));
+    let tf = min(min(max(t0.x, t1.x), max(t0.y, t1.y)), min(max(t0.z, t1.z), t_max));
+    return select(3.4e38, tn, tn <= tf);
+}
+
+// Moller-Trumbore: the distance to triangle t if the ray hits it within (0, t_max), else a
+// negative value.
+fn triangle_hit(t: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> f32 {
+    let a = tris[3u * t].xyz;
+    let e1 = tris[3u * t + 1u].xyz - a;
+    let e2 = tris[3u * t + 2u].xyz - a;
+    let p = cross(d, e2);
+    let det = dot(e1, p);
+    if (abs(det) < 1e-12) {
+        return -1.0;
+    }
+    let inv = 1.0 / det;
+    let s = o - a;
+    let u = dot(s, p) * inv;
+    let q = cross(s, e1);
+    let v = dot(d, q) * inv;
+    let tt = dot(e2, q) * inv;
+    let inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0 && tt > 0.0 && tt < t_max;
+    return select(-1.0, tt, inside);
+}
+
+const STACK: u32 = 48u;
+const NONE: u32 = 0xffffffffu;
+
+// True if any triangle lies on o + t d, t in (0, t_max).
+fn occluded(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
+    if (arrayLength(&nodes) == 0u || !(t_max > 0.0)) {
+        return false;
+    }
+    // Zero components become tiny ones: WGSL leaves x / 0 undefined.
+    let inv_d = 1.0 / select(d, vec3<f32>(1e-20), abs(d) < vec3<f32>(1e-20));
+    var stack: array<u32, STACK>;
+    var top = 0u;
+    var node = 0u;
+    if (box_entry(nodes[0].lo, nodes[0].hi, o, inv_d, t_max) > 3.0e38) {
+        return false;
+    }
+    loop {
+        let n = nodes[node];
+        // The node visited next; NONE: take one from the stack.
+        var next = NONE;
+        if (n.count > 0u) {
+            for (var i = 0u; i < n.count; i++) {
+                if (triangle_hit(n.first + i, o, d, t_max) > 0.0) {
+                    return true;
+                }
+            }
+        } else {
+            let a = n.first;
+            let b = n.first + 1u;
+            let ta = box_entry(nodes[a].lo, nodes[a].hi, o, inv_d, t_max);
+            let tb = box_entry(nodes[b].lo, nodes[b].hi, o, inv_d, t_max);
+            let hit_a = ta < 3.0e38;
+            let hit_b = tb < 3.0e38;
+            if (hit_a && hit_b) {
+                // Nearer child first, the other on the stack (the BVH's depth is checked
+                // against STACK when it is uploaded).
+                next = select(b, a, ta <= tb);
+                stack[top] = select(a, b, ta <= tb);
+                top++;
+            } else if (hit_a) {
+                next = a;
+            } else if (hit_b) {
+                next = b;
+            }
+        }
+        if (next == NONE) {
+            if (top == 0u) {
+                break;
+            }
+            top--;
+            next = stack[top];
+        }
+        node = next;
+    }
+    return false;
+}
+
+// World::offset: p moved off its surface (geometric normal n) by eps towards `towards`.
+fn offset(p: vec3<f32>, n: vec3<f32>, towards: vec3<f32>, eps: f32) -> vec3<f32> {
+    let s = select(-1.0, 1.0, dot(n, towards) >= 0.0);
+    return p + n * (s * eps);
+}
+
+// World::occluded_between: both ends moved off their surfaces (geometric normals na, nb) by
+// eps first, so that neither surface shadows itself.
+fn occluded_between(a: vec3<f32>, na: vec3<f32>, b: vec3<f32>, nb: vec3<f32>, eps: f32) -> bool {
+    let o = offset(a, na, b - a, eps);
+    let e = offset(b, nb, a - b, eps);
+    let d = e - o;
+    let len = length(d);
+    if (len <= eps) {
+        return false;
+    }
+    return occluded(o, d / len, len * (1.0 - 1e-4));
+}

@@ -1,0 +1,266 @@
+//! The GPU backend against the CPU: the WGSL validated by naga (no adapter needed), and, where
+//! an adapter exists (lavapipe in CI), the GPU brute force against the CPU's over the same
+//! VPLs.
+
+use lgh_render::image::metrics::diff;
+use lgh_render::methods::brute::{BRUTE, BRUTE_UNSHADOWED};
+use lgh_render::{Component, RenderSettings, Silent, World, render_frame};
+
+#[test]
+fn every_shader_is_valid_wgsl() {
+    let source = lgh_gpu::brute::source();
+    let module = naga::front::wgsl::parse_str(&source)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+}
+
+#[test]
+fn the_bvh_flattens_with_every_triangle() {
+    // Every triangle is in the leaves (three corners each), and the depth check passes.
+    let mut scene = lgh_scene::cornell::cornell_box();
+    scene
+        .finish(std::path::Path::new("<built-in cornell>"))
+        .expect("scene");
+    let (nodes, tris) = lgh_gpu::scene::flatten(&scene.mesh).expect("flattens");
+    assert_eq!(tris.len(), 3 * scene.mesh.len());
+    assert!(!nodes.is_empty());
+}
+
+fn world(rel: Option<&str>) -> World {
+    let scene = match rel {
+        None => {
+            let mut s = lgh_scene::cornell::cornell_box();
+            s.finish(std::path::Path::new("<built-in cornell>"))
+                .expect("scene");
+            s
+        }
+        Some(r) => {
+            let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../scenes")
+                .join(r);
+            lgh_scene::load(&p).expect("scene")
+        }
+    };
+    World::new(scene)
+}
+
+/// GPU `brute` equals CPU `brute` over the same VPLs within rel_rmse 0.002 (and
+/// `brute-unshadowed` too), indirect light at 48x27 with 2,000 VPLs, on the default scene
+/// and the three test scenes.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn gpu_brute_force_equals_the_cpu_brute_force() {
+    let ctx = lgh_gpu::GpuContext::shared().expect("an adapter");
+    eprintln!("adapter: {}", ctx.adapter_name());
+    for rel in [
+        None,
+        Some("test/two-rooms.toml"),
+        Some("test/colonnade.toml"),
+        Some("test/clutter.toml"),
+    ] {
+        let w = world(rel);
+        for (cpu, gpu) in [
+            (BRUTE_UNSHADOWED, lgh_gpu::brute::BRUTE_UNSHADOWED_GPU),
+            (BRUTE, lgh_gpu::brute::BRUTE_GPU),
+        ] {
+            let s = RenderSettings {
+                method: cpu,
+                width: 48,
+                height: 27,
+                vpls: 2000,
+                component: Component::Indirect,
+                ..RenderSettings::default()
+            };
+            let a = render_frame(&w, &s, &Silent).expect("cpu").image;
+            let b = render_frame(
+                &w,
+                &RenderSettings {
+                    method: gpu,
+                    ..s.clone()
+                },
+                &Silent,
+            )
+            .expect("gpu")
+            .image;
+            let m = diff(&b, &a).expect("same size");
+            eprintln!("{rel:?} {}: {m:?}", cpu.name());
+            assert!(m.rel_rmse <= 0.002, "{rel:?} {}: {m:?}", cpu.name());
+            assert!(b.pixels.iter().all(|p| p.is_finite()));
+        }
+    }
+}
+
+/// The same frame twice gives the same bits (no result depends on scheduling).
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn gpu_brute_force_is_deterministic() {
+    let w = world(None);
+    let s = RenderSettings {
+        method: lgh_gpu::brute::BRUTE_GPU,
+        width: 32,
+        height: 18,
+        vpls: 500,
+        ..RenderSettings::default()
+    };
+    let a = render_frame(&w, &s, &Silent).expect("gpu").image;
+    let b = render_frame(&w, &s, &Silent).expect("gpu").image;
+    assert_eq!(a.pixels, b.pixels);
+}
+
+/// A CPU twin of `shaders/bvh.wgsl`'s traversal over the flattened BVH.
+fn occluded_twin(
+    nodes: &[lgh_gpu::scene::GpuNode],
+    tris: &[glam::Vec4],
+    o: glam::Vec3,
+    d: glam::Vec3,
+    t_max: f32,
+) -> bool {
+    use glam::Vec3;
+    let inv = Vec3::ONE / d;
+    let entry = |n: &lgh_gpu::scene::GpuNode| {
+        let t0 = (Vec3::from(n.lo) - o) * inv;
+        let t1 = (Vec3::from(n.hi) - o) * inv;
+        let tn = t0.min(t1).max_element().max(0.0);
+        let tf = t0.max(t1).min_element().min(t_max);
+        (tn <= tf).then_some(tn)
+    };
+    let mut stack = vec![0usize];
+    if nodes.is_empty() || entry(&nodes[0]).is_none() {
+        return false;
+    }
+    while let Some(i) = stack.pop() {
+        let n = nodes[i];
+        if n.count > 0 {
+            for t in n.first..n.first + n.count {
+                let a = tris[3 * t as usize].truncate();
+                let e1 = tris[3 * t as usize + 1].truncate() - a;
+                let e2 = tris[3 * t as usize + 2].truncate() - a;
+                let p = d.cross(e2);
+                let det = e1.dot(p);
+                if det.abs() < 1e-12 {
+                    continue;
+                }
+                let s = o - a;
+                let u = s.dot(p) / det;
+                let q = s.cross(e1);
+                let v = d.dot(q) / det;
+                let tt = e2.dot(q) / det;
+                if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && tt > 0.0 && tt < t_max {
+                    return true;
+                }
+            }
+        } else {
+            for c in [n.first as usize, n.first as usize + 1] {
+                if entry(&nodes[c]).is_some() {
+                    stack.push(c);
+                }
+            }
+        }
+    }
+    false
+}
+
+/// The flattened BVH answers as the CPU's tracer on random segments of every test scene.
+#[test]
+fn the_flattened_bvh_answers_as_the_cpu_tracer() {
+    for rel in [
+        None,
+        Some("test/two-rooms.toml"),
+        Some("test/colonnade.toml"),
+        Some("test/clutter.toml"),
+    ] {
+        let w = world(rel);
+        let (nodes, tris) = lgh_gpu::scene::flatten(&w.scene.mesh).expect("flattens");
+        let (lo, hi) = w.scene.mesh.bounds();
+        let mut rng = lgh_core::rng::Rng::new(&[5]);
+        let mut wrong = 0;
+        for _ in 0..20_000 {
+            let mut p =
+                || lo + (hi - lo) * glam::Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let (a, b) = (p(), p());
+            let len = (b - a).length();
+            let d = (b - a) / len;
+            wrong +=
+                usize::from(occluded_twin(&nodes, &tris, a, d, len) != w.accel.occluded(a, d, len));
+        }
+        assert!(wrong <= 4, "{rel:?}: {wrong} of 20000");
+    }
+}
+
+/// The GPU's traversal answers as the CPU's tracer for the shadow rays of the brute force
+/// (every visible point to every VPL) on the default scene and the three test scenes.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn gpu_occlusion_agrees_with_the_cpu_tracer() {
+    let ctx = lgh_gpu::GpuContext::shared().expect("an adapter");
+    for rel in [
+        None,
+        Some("test/two-rooms.toml"),
+        Some("test/colonnade.toml"),
+        Some("test/clutter.toml"),
+    ] {
+        let w = world(rel);
+        let s = RenderSettings {
+            width: 32,
+            height: 18,
+            vpls: 200,
+            method: BRUTE_UNSHADOWED,
+            ..RenderSettings::default()
+        };
+        let vpls = render_frame(&w, &s, &Silent).expect("frame").vpls.vpls;
+        let g = lgh_render::passes::gbuffer::GBuffer::render(
+            &w,
+            &w.scene.camera().frame(32, 18),
+            32,
+            18,
+        );
+        let pairs: Vec<lgh_gpu::rays::PointPair> = (0..g.len())
+            .filter(|&p| g.is_hit(p))
+            .flat_map(|p| {
+                let (a, na) = (g.position[p], g.geo_normal[p]);
+                let vpls = &vpls;
+                (0..vpls.len()).map(move |j| lgh_gpu::rays::PointPair {
+                    a,
+                    na,
+                    b: vpls.positions[j],
+                    nb: vpls.normals[j],
+                })
+            })
+            .collect();
+        let scene = lgh_gpu::GpuScene::new(ctx, &w.scene.mesh).expect("upload");
+        let gpu = lgh_gpu::rays::occluded_between(ctx, &scene, &pairs, w.ray_epsilon).expect("gpu");
+        let wrong: Vec<usize> = (0..pairs.len())
+            .filter(|&k| {
+                gpu[k] != w.occluded_between(pairs[k].a, pairs[k].na, pairs[k].b, pairs[k].nb)
+            })
+            .collect();
+        for &k in wrong.iter().take(3) {
+            eprintln!(
+                "{rel:?}: gpu {} for {:?} {:?}",
+                gpu[k],
+                pairs[k],
+                w.shadow_segment(pairs[k].a, pairs[k].na, pairs[k].b, pairs[k].nb)
+            );
+        }
+        assert!(
+            wrong.len() * 1000 <= pairs.len(),
+            "{rel:?}: {} of {} pairs disagree",
+            wrong.len(),
+            pairs.len()
+        );
+    }
+}
