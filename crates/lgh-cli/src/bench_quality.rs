@@ -31,9 +31,10 @@ pub struct QualityBenchArgs {
     /// VPLs of the equal-VPL comparison.
     #[arg(long, default_value_t = 20_000)]
     pub vpls: usize,
-    /// Frame counts of the accumulation curve, comma-separated (empty: no curve).
-    #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16")]
-    pub accumulate: Vec<u32>,
+    /// Frame counts of the accumulation curve, comma-separated, each 1-65536 (an empty
+    /// list, `--accumulate ""`: no curve).
+    #[arg(long, default_value = "1,2,4,8,16", value_parser = parse_counts)]
+    pub accumulate: Counts,
     /// Image size of the accumulation curve.
     #[arg(long, default_value = "96x54", value_parser = parse_size)]
     pub accumulate_size: (u32, u32),
@@ -164,6 +165,30 @@ fn indirect_only(size: (u32, u32), vpls: usize) -> RenderSettings {
         component: Component::Indirect,
         ..RenderSettings::default()
     }
+}
+
+/// The frame counts of `--accumulate` (a list that may be empty).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Counts(pub Vec<u32>);
+
+impl std::ops::Deref for Counts {
+    type Target = [u32];
+    fn deref(&self) -> &[u32] {
+        &self.0
+    }
+}
+
+/// Parses `1,2,4` (or nothing) into frame counts of 1 to 65536.
+fn parse_counts(s: &str) -> Result<Counts, String> {
+    s.split(',')
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+        .map(|t| match t.parse::<u32>() {
+            Ok(n) if (1..=65536).contains(&n) => Ok(n),
+            _ => Err(format!("{t:?} is not a frame count from 1 to 65536")),
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map(Counts)
 }
 
 /// The accumulation curve of one scene: lgh --accumulate N against brute --accumulate N.
@@ -307,7 +332,11 @@ pub fn run(args: &QualityBenchArgs) -> Result<()> {
         );
     }
     println!();
-    println!("At the defaults (lgh k=4, slc eb=0.0005), and slc at equal time:");
+    println!(
+        "At the defaults (lgh k={}, slc eb={}), and slc at equal time:",
+        lgh::DEFAULT_SHADOW_SAMPLES,
+        lgh_render::methods::slc::DEFAULT_ERROR_BOUND
+    );
     println!(
         "{:<14} {:>9} {:>9} {:>7} {:>9} {:>9} {:>7} {:>14} {:>7}  lgh wins",
         "scene", "lgh FLIP", "bias", "ms", "slc FLIP", "bias", "ms", "slc equal time", "ms"

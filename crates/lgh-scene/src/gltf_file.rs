@@ -22,9 +22,7 @@ use crate::{Camera, Light, Material, Scene, SceneError, Texture};
 /// # Errors
 /// The file or one of its buffers or images cannot be read, or it is not valid glTF.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    if !path.is_file() {
-        return Err(SceneError::new(path, "file not found"));
-    }
+    crate::file_kind::regular_file(path)?;
     contain_panics(path, "glTF", || load_checked(path))
 }
 

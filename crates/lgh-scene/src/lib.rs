@@ -25,6 +25,7 @@ pub mod camera;
 pub mod cornell;
 pub mod emitter_room;
 pub mod error;
+pub mod file_kind;
 pub mod gltf_file;
 pub mod light;
 pub mod material;
@@ -54,6 +55,7 @@ use std::path::Path;
 /// A [`SceneError`] naming the file and the problem: unreadable file, parse error, unknown
 /// extension, non-finite vertices, no triangles, no lights (scene files).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    file_kind::regular_file(path)?;
     if has_extension(path, &["toml"]) {
         return scene_file::load(path);
     }

@@ -20,9 +20,7 @@ use crate::{Material, Scene, SceneError, Texture};
 /// # Errors
 /// The file cannot be read or does not parse as OBJ.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    if !path.is_file() {
-        return Err(SceneError::new(path, "file not found"));
-    }
+    crate::file_kind::regular_file(path)?;
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: true,

@@ -270,6 +270,7 @@ pub fn resolve_mesh_path(scene_file: &Path, mesh: &str) -> Result<PathBuf, Scene
 /// The file cannot be read or parsed (the message gives the TOML line), the mesh cannot be
 /// loaded, or the finished scene is invalid (see [`Scene::finish`]).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    crate::file_kind::regular_file(path)?;
     let text = std::fs::read_to_string(path)
         .map_err(|e| SceneError::new(path, format!("cannot read scene file: {e}")))?;
     let desc: SceneFile = toml::from_str(&text).map_err(|e| {

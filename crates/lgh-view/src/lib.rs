@@ -91,11 +91,16 @@ pub const INTERACTIVE_ALPHA: f32 = 1.5;
 /// passes cost 1-3% (docs/performance.md, "The viewer frame (2026-12-03, fifth session)").
 pub const INTERACTIVE_FILTER_PASSES: u32 = 4;
 
+/// Shadow samples per pixel the viewer starts lgh with (K cycles 0, 1, 4): the render
+/// default (5) gave 4.4 fps at 640x360, not an interactive start.
+pub const INTERACTIVE_SHADOW_SAMPLES: u32 = 1;
+
 impl ViewArgs {
     /// Starts at interactive settings where the command line leaves them (`given(id)` tells
     /// whether the flag of clap id `id` was given): alpha [`INTERACTIVE_ALPHA`] and S_1 the
     /// lowest level shaded, one hierarchy (no normal bins), [`INTERACTIVE_FILTER_PASSES`]
-    /// a-trous passes, and for lgh 4 x 4 interleaving ([`lgh::INTERACTIVE_INTERLEAVE`]),
+    /// a-trous passes, and for lgh 4 x 4 interleaving ([`lgh::INTERACTIVE_INTERLEAVE`]) and
+    /// [`INTERACTIVE_SHADOW_SAMPLES`] shadow sample,
     /// instead of the render defaults, which favour accuracy.
     pub fn use_interactive_defaults(&mut self, given: impl Fn(&str) -> bool) {
         let lgh_method = [lgh::LGH, lgh::LGH_UNSHADOWED].contains(&self.settings.method);
@@ -113,6 +118,9 @@ impl ViewArgs {
         }
         if !given("filter_passes") {
             self.settings.shadows.filter_passes = INTERACTIVE_FILTER_PASSES;
+        }
+        if !given("samples") && lgh_method {
+            self.settings.shadows.samples = Some(INTERACTIVE_SHADOW_SAMPLES);
         }
     }
 

@@ -102,13 +102,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     check_args(args)?;
     let mut settings = args.render_settings();
     settings.validate()?;
+    let mut device = "cpu".to_owned();
     if args.device == args::Device::Gpu {
         let name = settings.method.name();
         settings.method = lgh_gpu::gpu_method(settings.method)
             .ok_or_else(|| lgh_gpu::GpuError::NotPorted(name.to_owned()))?;
-        let ctx = lgh_gpu::GpuContext::shared()?;
+        device = lgh_gpu::GpuContext::shared()?.adapter_name();
         if !args.quiet {
-            eprintln!("GPU: {}", ctx.adapter_name());
+            eprintln!("GPU: {device}");
         }
     }
     for w in settings.warnings() {
@@ -156,6 +157,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             threads,
             triangles: world.accel.len(),
             accel: world.accel.kind().name(),
+            device: device.clone(),
             load_ms,
             bvh_ms,
             frames: args.accumulate,

@@ -38,6 +38,8 @@ pub struct FrameReport<'a> {
     pub triangles: usize,
     /// The ray tracer (`obvhs` or `embree`).
     pub accel: &'static str,
+    /// Where the indirect light was computed: `cpu`, or the GPU adapter's name.
+    pub device: String,
     /// Frames averaged (`--accumulate`).
     pub accumulated_frames: u32,
     /// Per-pass wall times in ms, summed over the frames (`total` includes the BVH build).
@@ -63,6 +65,8 @@ pub struct ReportContext<'a> {
     pub triangles: usize,
     /// The ray tracer.
     pub accel: &'static str,
+    /// `cpu`, or the GPU adapter's name.
+    pub device: String,
     /// Scene loading time.
     pub load_ms: f64,
     /// BVH build time.
@@ -117,6 +121,7 @@ impl<'a> FrameReport<'a> {
             threads: c.threads,
             triangles: c.triangles,
             accel: c.accel,
+            device: c.device.clone(),
             accumulated_frames: c.frames,
             timings_ms: timings,
             memory: MemoryReport {

@@ -12,7 +12,9 @@ fn render_reports_its_ray_tracer_and_obvhs_is_always_there() {
     } else {
         "obvhs"
     };
-    assert_eq!(render_stats(&d, &[])["accel"], default);
+    let stats = render_stats(&d, &[]);
+    assert_eq!(stats["accel"], default);
+    assert_eq!(stats["device"], "cpu");
     assert_eq!(render_stats(&d, &["--accel", "obvhs"])["accel"], "obvhs");
     let out = lgh(&["bench", "rays", "--rays", "2000", "--rounds", "1", "--json"]);
     assert!(

@@ -531,3 +531,38 @@ fn normal_bins_take_an_optional_value() {
         &["--normal-bins", "maybe"],
     );
 }
+
+/// `bench quality --accumulate ""` runs without the curve (its help says so), a bad count is
+/// refused with the range, and the summary names the defaults actually used.
+#[test]
+fn bench_quality_takes_an_empty_curve_and_names_its_defaults() {
+    let d = temp_dir("quality-empty");
+    let plot = d.join("q.png");
+    let base = [
+        "bench",
+        "quality",
+        "builtin:cornell",
+        "--size",
+        "32x18",
+        "--vpls",
+        "300",
+        "--plot",
+    ];
+    let out = lgh(&[&base[..], &[s(&plot), "--accumulate", ""]].concat());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let k = lgh_render::methods::lgh::DEFAULT_SHADOW_SAMPLES;
+    assert!(text.contains(&format!("lgh k={k},")), "{text}");
+    assert!(
+        !text.contains("lgh --accumulate"),
+        "no curve was asked for: {text}"
+    );
+    assert_error(
+        &lgh(&[&base[..], &[s(&plot), "--accumulate", "1,0"]].concat()),
+        &["\"0\"", "1 to 65536"],
+    );
+}

@@ -4,7 +4,8 @@ use super::{assert_error, lgh, s, temp_dir};
 
 const SMALL: [&str; 6] = ["--size", "160x90", "--vpls", "5000", "--frames", "6"];
 
-/// The viewer starts at interactive settings (alpha 1.5, S_1 first, 4 a-trous passes) unless
+/// The viewer starts at interactive settings (alpha 1.5, S_1 first, 4 a-trous passes, 1
+/// shadow sample) unless
 /// the command line gives them; a flag given keeps its value, the others still get the
 /// viewer's.
 #[test]
@@ -30,6 +31,7 @@ fn view_starts_at_interactive_settings_unless_given() {
             json["settings"]["shadows"]["filter_passes"]
                 .as_u64()
                 .unwrap(),
+            json["settings"]["shadows"]["samples"].as_u64(),
         )
     };
     // --help lists the keys after the flags.
@@ -37,10 +39,12 @@ fn view_starts_at_interactive_settings_unless_given() {
     for key in ["Controls", "W/S", "overdraw heat map", "Esc"] {
         assert!(help.contains(key), "{key}: {help}");
     }
-    assert_eq!(settings(&[]), (1.5, 1, 4));
-    assert_eq!(settings(&["--alpha", "4"]), (4.0, 1, 4));
-    assert_eq!(settings(&["--start-level", "0"]), (1.5, 0, 4));
-    assert_eq!(settings(&["--filter-passes", "5"]), (1.5, 1, 5));
+    let one = Some(1);
+    assert_eq!(settings(&[]), (1.5, 1, 4, one));
+    assert_eq!(settings(&["--alpha", "4"]), (4.0, 1, 4, one));
+    assert_eq!(settings(&["--start-level", "0"]), (1.5, 0, 4, one));
+    assert_eq!(settings(&["--filter-passes", "5"]), (1.5, 1, 5, one));
+    assert_eq!(settings(&["--shadow-samples", "4"]), (1.5, 1, 4, Some(4)));
 }
 
 #[test]
