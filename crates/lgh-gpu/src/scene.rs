@@ -2,9 +2,8 @@
 //! builder family as the CPU's tracer), flattened for traversal in compute
 //! (`shaders/bvh.wgsl`).
 
-use glam::{Vec3, Vec3A, Vec4};
+use glam::{Vec3, Vec4};
 use obvhs::BvhBuildParams;
-use obvhs::aabb::Aabb;
 
 use crate::context::{GpuContext, GpuError};
 
@@ -44,16 +43,7 @@ pub fn flatten(mesh: &lgh_scene::Mesh) -> Result<(Vec<GpuNode>, Vec<Vec4>), GpuE
     if mesh.is_empty() {
         return Ok((Vec::new(), Vec::new()));
     }
-    // The CPU tracer's padding (lgh-render world/accel.rs): flat walls otherwise give boxes of
-    // zero thickness.
-    let (lo, hi) = mesh.bounds();
-    let pad = Vec3A::splat(1e-4 * (hi - lo).max_element().max(1e-6));
-    let boxes: Vec<Aabb> = (0..mesh.len())
-        .map(|t| {
-            let [a, b, c] = mesh.vertices(t).map(Vec3A::from);
-            Aabb::new(a.min(b).min(c) - pad, a.max(b).max(c) + pad)
-        })
-        .collect();
+    let boxes = lgh_render::world::accel::padded_boxes(mesh);
     let bvh = obvhs::bvh2::builder::build_bvh2(
         &boxes,
         BvhBuildParams::medium_build(),

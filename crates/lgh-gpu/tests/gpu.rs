@@ -31,6 +31,14 @@ fn the_bvh_flattens_with_every_triangle() {
     assert!(!nodes.is_empty());
 }
 
+/// The default scene (None) and the project's three test scenes.
+const SCENES: [Option<&str>; 4] = [
+    None,
+    Some("test/two-rooms.toml"),
+    Some("test/colonnade.toml"),
+    Some("test/clutter.toml"),
+];
+
 fn world(rel: Option<&str>) -> World {
     let scene = match rel {
         None => {
@@ -60,12 +68,7 @@ fn world(rel: Option<&str>) -> World {
 fn gpu_brute_force_equals_the_cpu_brute_force() {
     let ctx = lgh_gpu::GpuContext::shared().expect("an adapter");
     eprintln!("adapter: {}", ctx.adapter_name());
-    for rel in [
-        None,
-        Some("test/two-rooms.toml"),
-        Some("test/colonnade.toml"),
-        Some("test/clutter.toml"),
-    ] {
+    for rel in SCENES {
         let w = world(rel);
         for (cpu, gpu) in [
             (BRUTE_UNSHADOWED, lgh_gpu::brute::BRUTE_UNSHADOWED_GPU),
@@ -174,12 +177,7 @@ fn occluded_twin(
 /// The flattened BVH answers as the CPU's tracer on random segments of every test scene.
 #[test]
 fn the_flattened_bvh_answers_as_the_cpu_tracer() {
-    for rel in [
-        None,
-        Some("test/two-rooms.toml"),
-        Some("test/colonnade.toml"),
-        Some("test/clutter.toml"),
-    ] {
+    for rel in SCENES {
         let w = world(rel);
         let (nodes, tris) = lgh_gpu::scene::flatten(&w.scene.mesh).expect("flattens");
         let (lo, hi) = w.scene.mesh.bounds();
@@ -207,12 +205,7 @@ fn the_flattened_bvh_answers_as_the_cpu_tracer() {
 )]
 fn gpu_occlusion_agrees_with_the_cpu_tracer() {
     let ctx = lgh_gpu::GpuContext::shared().expect("an adapter");
-    for rel in [
-        None,
-        Some("test/two-rooms.toml"),
-        Some("test/colonnade.toml"),
-        Some("test/clutter.toml"),
-    ] {
+    for rel in SCENES {
         let w = world(rel);
         let s = RenderSettings {
             width: 32,

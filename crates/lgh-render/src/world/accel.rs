@@ -159,16 +159,24 @@ impl std::fmt::Debug for Accel {
     }
 }
 
+/// Every triangle's box, padded by 1e-4 of the scene's size: the input of a BVH build (obvhs
+/// here, the GPU backend's too). Flat axis-aligned walls otherwise give boxes of zero
+/// thickness, which slow traversal by an order of magnitude (docs/design.md, "Ray tracing").
+#[must_use]
+pub fn padded_boxes(mesh: &Mesh) -> Vec<Aabb> {
+    let (lo, hi) = mesh.bounds();
+    let pad = Vec3A::splat(1e-4 * (hi - lo).max_element().max(1e-6));
+    (0..mesh.len())
+        .map(|t| {
+            let [a, b, c] = mesh.vertices(t).map(Vec3A::from);
+            Aabb::new(a.min(b).min(c) - pad, a.max(b).max(c) + pad)
+        })
+        .collect()
+}
+
 impl Obvhs {
     fn build(mesh: &Mesh) -> Self {
-        let (lo, hi) = mesh.bounds();
-        let pad = Vec3A::splat(1e-4 * (hi - lo).max_element().max(1e-6));
-        let boxes: Vec<Aabb> = (0..mesh.len())
-            .map(|t| {
-                let [a, b, c] = mesh.vertices(t).map(Vec3A::from);
-                Aabb::new(a.min(b).min(c) - pad, a.max(b).max(c) + pad)
-            })
-            .collect();
+        let boxes = padded_boxes(mesh);
         let bvh = obvhs::cwbvh::builder::build_cwbvh(
             &boxes,
             BvhBuildParams::medium_build(),
