@@ -21,7 +21,8 @@ pub struct BuildArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "1000,10000,100000,1000000"
+        default_value = "1000,10000,100000,1000000",
+        value_parser = crate::caps::count(crate::caps::MAX_BENCH_VPLS)
     )]
     pub lights: Vec<usize>,
     /// Use the VPLs of this scene (light tracing, 3 bounces) instead of the synthetic set:
@@ -33,7 +34,7 @@ pub struct BuildArgs {
     pub levels: LevelCount,
     /// Timed runs per configuration, after one untimed warm-up build; the report gives
     /// medians.
-    #[arg(long, default_value_t = 7)]
+    #[arg(long, default_value_t = 7, value_parser = crate::caps::count(crate::caps::MAX_RUNS))]
     pub runs: usize,
     /// Threads and output.
     #[command(flatten)]

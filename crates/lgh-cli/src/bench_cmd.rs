@@ -3,7 +3,6 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use clap::builder::TypedValueParser;
 use clap::{Args, Subcommand};
 use lgh_render::World;
 use lgh_render::raybench::{RayBench, bench_rays};
@@ -100,10 +99,10 @@ pub struct RaysArgs {
     /// Scene file (.toml, .gltf, .glb, .obj). Default: the built-in Cornell box.
     pub scene: Option<PathBuf>,
     /// Rays of each kind (at most 100 million).
-    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(1..=100_000_000).map(|v| v as usize))]
+    #[arg(long, default_value_t = 1_000_000, value_parser = crate::caps::count(crate::caps::MAX_BENCH_RAYS))]
     pub rays: usize,
     /// Rounds (each measures every ray tracer once; the medians are reported).
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100).map(|v| v as usize))]
+    #[arg(long, default_value_t = 3, value_parser = crate::caps::count(100))]
     pub rounds: usize,
     /// Threads and output.
     #[command(flatten)]

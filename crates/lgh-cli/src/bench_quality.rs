@@ -29,7 +29,7 @@ pub struct QualityBenchArgs {
     #[arg(long, default_value = "320x180", value_parser = parse_size)]
     pub size: (u32, u32),
     /// VPLs of the equal-VPL comparison.
-    #[arg(long, default_value_t = 20_000)]
+    #[arg(long, default_value_t = 20_000, value_parser = crate::caps::count(crate::caps::MAX_BENCH_VPLS))]
     pub vpls: usize,
     /// Frame counts of the accumulation curve, comma-separated, each 1-65536 (an empty
     /// list, `--accumulate ""`: no curve).
@@ -39,7 +39,7 @@ pub struct QualityBenchArgs {
     #[arg(long, default_value = "96x54", value_parser = parse_size)]
     pub accumulate_size: (u32, u32),
     /// VPLs per frame of the accumulation curve.
-    #[arg(long, default_value_t = 2000)]
+    #[arg(long, default_value_t = 2000, value_parser = crate::caps::count(crate::caps::MAX_BENCH_VPLS))]
     pub accumulate_vpls: usize,
     /// The error-against-time plot (log-log PNG: FLIP and rel_rmse per scene).
     #[arg(long, default_value = "bench-quality.png")]

@@ -25,7 +25,8 @@ pub struct RenderBenchArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "1000,10000,100000,1000000"
+        default_value = "1000,10000,100000,1000000",
+        value_parser = crate::caps::count(crate::caps::MAX_BENCH_VPLS)
     )]
     pub vpls: Vec<usize>,
     /// Image size, WIDTHxHEIGHT (the paper uses 1280x720).
@@ -39,7 +40,7 @@ pub struct RenderBenchArgs {
     #[arg(long, value_delimiter = ',', default_value = "1")]
     pub interleave: Vec<u32>,
     /// Frames rendered per configuration; every time reported is the median over them.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 1, value_parser = crate::caps::count_u32(crate::caps::MAX_RUNS))]
     pub runs: u32,
     /// Threads and output.
     #[command(flatten)]

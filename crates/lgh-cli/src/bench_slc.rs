@@ -23,7 +23,7 @@ pub struct SlcBenchArgs {
     /// Scene for the VPL part (file or builtin:NAME). Default: the built-in Cornell box.
     pub scene: Option<PathBuf>,
     /// VPL counts, comma-separated (the paper's 16K, 65K, 262K).
-    #[arg(long, value_delimiter = ',', default_value = "16384,65536,262144")]
+    #[arg(long, value_delimiter = ',', default_value = "16384,65536,262144", value_parser = crate::caps::count(crate::caps::MAX_BENCH_VPLS))]
     pub vpls: Vec<usize>,
     /// Image size of the VPL part, WIDTHxHEIGHT.
     #[arg(long, default_value = "320x180", value_parser = parse_size)]
@@ -44,7 +44,7 @@ pub struct SlcBenchArgs {
     #[arg(long, default_value_t = 4000.0)]
     pub pt_budget_ms: f64,
     /// Samples per pixel of the `pt-uniform` reference.
-    #[arg(long, default_value_t = 1024)]
+    #[arg(long, default_value_t = 1024, value_parser = crate::caps::count_u32(65536))]
     pub pt_reference_spp: u32,
     /// Error bound of `pt-slc`, relative to the emitter room's pixel values.
     #[arg(long, default_value_t = 0.005)]

@@ -20,13 +20,13 @@ pub struct TemporalBenchArgs {
     /// Scene (file or builtin:NAME). Default: the built-in Cornell box.
     pub scene: Option<PathBuf>,
     /// Frames per run (the first frames warm the history up and count too).
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = crate::caps::count_u32(crate::caps::MAX_BENCH_FRAMES))]
     pub frames: u32,
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "320x180", value_parser = parse_size)]
     pub size: (u32, u32),
     /// VPLs per frame.
-    #[arg(long, default_value_t = 10_000)]
+    #[arg(long, default_value_t = 10_000, value_parser = crate::caps::count(crate::caps::MAX_BENCH_VPLS))]
     pub vpls: usize,
     /// Weight of the current frame in the moving average.
     #[arg(long, default_value_t = 0.1)]

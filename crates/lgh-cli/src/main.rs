@@ -14,6 +14,7 @@ mod bench_quality;
 mod bench_render;
 mod bench_slc;
 mod bench_temporal;
+mod caps;
 mod diff_cmd;
 mod heatmap;
 mod progress_bar;
@@ -84,6 +85,12 @@ fn install_panic_hook() {
 
 fn main() -> ExitCode {
     install_panic_hook();
+    // An interrupted run leaves no `.partial` file behind (lgh_render::output). Without a
+    // handler (it cannot be installed) Ctrl-C still stops the process.
+    let _ = ctrlc::set_handler(|| {
+        lgh_render::output::remove_partial_files();
+        std::process::exit(130);
+    });
     let matches = Cli::command().get_matches();
     let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     let result = match cli.command {
@@ -120,8 +127,12 @@ fn given(matches: &clap::ArgMatches, command: &str, id: &str) -> bool {
 /// moved) and runs the viewer.
 fn view(args: lgh_view::ViewArgs) -> anyhow::Result<()> {
     set_threads(args.threads)?;
+    args.check()?;
     let default = std::path::PathBuf::from("builtin:cornell-moving-light");
     let scene = scene_arg::load_scene(Some(args.scene.as_ref().unwrap_or(&default)))?;
+    // The viewer holds two frames (the accumulated or filtered history beside the new one).
+    let estimate = lgh_render::budget::MemoryEstimate::new(&scene, &args.render_settings(), 2);
+    sysmem::check(&estimate, None)?;
     if args.headless {
         lgh_view::headless::run(&args, scene)
     } else {

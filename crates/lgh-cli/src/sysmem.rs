@@ -1,16 +1,61 @@
 //! Memory of the machine and of this process (Linux /proc), and the memory limit of
-//! `lgh render`: the machine's available memory (or `--max-memory`)
+//! `lgh render` and `lgh view`: the memory available to the process (or `--max-memory`)
 //! against the library's estimate, checked before the large allocations; and the peak
 //! memory the process reached, for `--stats`.
 
 use anyhow::{Result, bail};
 use lgh_render::budget::{Bytes, MemoryEstimate};
 
-/// Memory the system can give without swapping (`MemAvailable` of /proc/meminfo); `None`
-/// where that is not known (not Linux).
+/// Memory this process can still take: the least of what the system can give without
+/// swapping (`MemAvailable` of /proc/meminfo), what the process's cgroup leaves
+/// (`memory.max - memory.current`, cgroup v2, or v1's `memory.limit_in_bytes - usage`),
+/// and what its address-space limit leaves (`RLIMIT_AS` of /proc/self/limits less the
+/// address space in use, `VmSize`); `None` where none is known (not Linux).
 #[must_use]
 pub fn available_bytes() -> Option<u64> {
-    proc_field("/proc/meminfo", "MemAvailable:")
+    [
+        proc_field("/proc/meminfo", "MemAvailable:"),
+        cgroup_left(),
+        address_space_left(),
+    ]
+    .into_iter()
+    .flatten()
+    .min()
+}
+
+/// What the cgroup's memory limit leaves, if it has one.
+fn cgroup_left() -> Option<u64> {
+    let number = |p: &str| -> Option<u64> { std::fs::read_to_string(p).ok()?.trim().parse().ok() };
+    let v2 = || {
+        let rel = std::fs::read_to_string("/proc/self/cgroup").ok()?;
+        let path = rel
+            .lines()
+            .find_map(|l| l.strip_prefix("0::"))?
+            .trim()
+            .to_owned();
+        let dir = format!("/sys/fs/cgroup{path}");
+        let max = number(&format!("{dir}/memory.max"))?; // "max" (no limit) does not parse
+        Some(max.saturating_sub(number(&format!("{dir}/memory.current")).unwrap_or(0)))
+    };
+    v2().or_else(|| {
+        let max = number("/sys/fs/cgroup/memory/memory.limit_in_bytes")?;
+        // v1 writes a huge number for "no limit".
+        (max < 1 << 60).then(|| {
+            max.saturating_sub(number("/sys/fs/cgroup/memory/memory.usage_in_bytes").unwrap_or(0))
+        })
+    })
+}
+
+/// What `RLIMIT_AS` leaves of the address space, if it is set.
+fn address_space_left() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/self/limits").ok()?;
+    let line = text.lines().find(|l| l.starts_with("Max address space"))?;
+    let soft: u64 = line["Max address space".len()..]
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()?; // "unlimited" does not parse
+    Some(soft.saturating_sub(proc_field("/proc/self/status", "VmSize:").unwrap_or(0)))
 }
 
 /// The peak resident memory of this process so far (`VmHWM` of /proc/self/status); `None`

@@ -19,6 +19,7 @@
 //! | [`memory`] | working memory frames reuse |
 //! | [`budget`] | the memory a render needs, estimated before it allocates |
 //! | [`image`] | EXR/PNG files, tone mapping, image metrics |
+//! | [`output`] | output files written whole, never over a device or folder, cleaned up on Ctrl-C |
 //! | [`progress`], [`raybench`] | progress reporting; ray throughput |
 //!
 //! Every pass is parallel (rayon) and deterministic: the same seed gives the same image
@@ -61,6 +62,7 @@ pub mod frame;
 pub mod image;
 pub mod memory;
 pub mod methods;
+pub mod output;
 pub mod passes;
 pub mod progress;
 pub mod raybench;

@@ -163,7 +163,7 @@ pub struct RenderSettings {
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = RenderSettings::default().component))]
     pub component: Component,
     /// Shadow-ray samples per pixel for area lights (emissive triangles) in the direct pass
-    /// (stratified).
+    /// (stratified; at most 1024).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().area_samples))]
     pub area_samples: u32,
     /// How the direct light of area lights is estimated: `analytic` (closed-form unshadowed
@@ -240,6 +240,10 @@ pub struct SettingsError {
 
 /// Most VPLs a frame: 2^24 (about 4 GB with their hierarchy).
 pub const MAX_VPLS: usize = 1 << 24;
+
+/// The most area-light samples per pixel (`--area-samples`): 1024, far past where the
+/// analytic estimator's filtered ratio stops improving.
+pub const MAX_AREA_SAMPLES: u32 = 1024;
 
 /// Parses `WIDTHxHEIGHT` with both sides positive.
 ///
@@ -409,6 +413,7 @@ impl RenderSettings {
             in_range("shadow-samples", k, 0, MAX_SHADOW_SAMPLES)?;
         }
         in_range("spp", self.pt.spp, 1, 1 << 20)?;
+        in_range("area-samples", self.area_samples, 0, MAX_AREA_SAMPLES)?;
         if let Some(n) = self.tiling.interleave {
             in_range("interleave", n, 1, 16)?;
         }
@@ -443,6 +448,15 @@ pub enum RenderError {
     /// The VPLs could not form a lighting grid hierarchy.
     #[error("lighting grid hierarchy: {0}")]
     Grid(#[from] GridError),
+    /// An animation puts the scene where it cannot be rendered at a time (a camera keyframe
+    /// pair that passes through its own look-at point, geometry moved out of range).
+    #[error("at time {time} s: {message}")]
+    Animation {
+        /// The scene's time, in seconds.
+        time: f32,
+        /// What is wrong.
+        message: String,
+    },
     /// A backend outside this crate (the GPU) could not run the method, with its message.
     #[error("{0}")]
     Backend(String),

@@ -31,6 +31,56 @@ pub fn regular_file(path: &Path) -> Result<(), SceneError> {
     ))
 }
 
+/// Reads a regular file of at most `max` bytes (a text format with no size of its own: an
+/// MTL or scene file), refusing a bigger one by name before reading it; `what` names the
+/// format in the message.
+///
+/// # Errors
+/// Not a regular file, bigger than `max`, or unreadable.
+pub fn read_capped(path: &Path, max: u64, what: &str) -> Result<Vec<u8>, SceneError> {
+    use std::io::Read;
+    regular_file(path)?;
+    let file = std::fs::File::open(path)
+        .map_err(|e| SceneError::new(path, format!("cannot read: {e}")))?;
+    let mut bytes = Vec::new();
+    file.take(max + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| SceneError::new(path, format!("cannot read: {e}")))?;
+    if bytes.len() as u64 > max {
+        return Err(SceneError::new(
+            path,
+            format!("larger than the {} MiB a {what} may have", max >> 20),
+        ));
+    }
+    Ok(bytes)
+}
+
+/// Reads `len` bytes from the start of a regular file (a glTF buffer: no more than its
+/// `byteLength` says, whatever the file's size).
+///
+/// # Errors
+/// Not a regular file, shorter than `len`, or unreadable.
+pub fn read_exactly(path: &Path, len: u64) -> Result<Vec<u8>, SceneError> {
+    use std::io::Read;
+    regular_file(path)?;
+    let file = std::fs::File::open(path)
+        .map_err(|e| SceneError::new(path, format!("cannot read: {e}")))?;
+    let mut bytes = Vec::new();
+    file.take(len)
+        .read_to_end(&mut bytes)
+        .map_err(|e| SceneError::new(path, format!("cannot read: {e}")))?;
+    if (bytes.len() as u64) < len {
+        return Err(SceneError::new(
+            path,
+            format!("has {} bytes where the glTF file says {len}", bytes.len()),
+        ));
+    }
+    Ok(bytes)
+}
+
+/// The most bytes of a text file that has no size of its own (MTL, scene file): 64 MiB.
+pub const MAX_TEXT_BYTES: u64 = 64 << 20;
+
 #[cfg(unix)]
 fn special_kind(kind: &std::fs::FileType) -> &'static str {
     use std::os::unix::fs::FileTypeExt;

@@ -14,7 +14,7 @@ use glam::{Mat4, Vec2, Vec3};
 use crate::error::contain_panics;
 use crate::mesh::Primitive;
 use crate::obj::file_stem;
-use crate::{Camera, Light, Material, Scene, SceneError, Texture};
+use crate::{Camera, Light, Material, Scene, SceneError};
 
 /// Loads a glTF or GLB file into a scene. Call [`Scene::finish`] (or use [`crate::load`])
 /// before rendering.
@@ -28,14 +28,14 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 
 /// [`load`] of a file that exists.
 fn load_checked(path: &Path) -> Result<Scene, SceneError> {
-    let (doc, buffers, images) = gltf::import(path).map_err(|e| {
-        let message = match old_version(path) {
-            Some(v) => format!("glTF {v} is not supported (lgh reads glTF 2.0)"),
-            None => format!("cannot load glTF: {e}"),
-        };
-        SceneError::new(path, message)
-    })?;
+    let crate::gltf_import::Import {
+        document: doc,
+        buffers,
+        textures,
+        warnings,
+    } = crate::gltf_import::import(path)?;
     let mut scene = Scene::new(file_stem(path));
+    scene.report.warnings.extend(warnings);
 
     for ext in doc.extensions_used() {
         if ext == "KHR_materials_transmission" || ext == "KHR_materials_volume" {
@@ -44,18 +44,12 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
             ));
         }
     }
-    let mut texture_of_image = vec![None; images.len()];
-    for (i, img) in images.iter().enumerate() {
-        texture_of_image[i] = convert_image(img).map(|t| {
+    let mut texture_of_image = Vec::with_capacity(textures.len());
+    for t in textures {
+        texture_of_image.push(t.map(|t| {
             scene.textures.push(t);
             scene.textures.len() as u32 - 1
-        });
-        if texture_of_image[i].is_none() {
-            scene.report.warnings.push(format!(
-                "image {i} has an unsupported pixel format ({:?}); ignored",
-                img.format
-            ));
-        }
+        }));
     }
     for m in doc.materials() {
         let pbr = m.pbr_metallic_roughness();
@@ -171,14 +165,13 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
 }
 
 /// The version of a glTF file older than 2.0 (`"1.0"`; the GLB header's version for `.glb`),
-/// to explain why it does not load.
-fn old_version(path: &Path) -> Option<String> {
-    let bytes = std::fs::read(path).ok()?;
+/// from its bytes, to explain why it does not load.
+pub(crate) fn old_version(bytes: &[u8]) -> Option<String> {
     if let Some(header) = bytes.strip_prefix(b"glTF") {
         let v = u32::from_le_bytes(header.get(..4)?.try_into().ok()?);
         return (v < 2).then(|| format!("{v}.0"));
     }
-    let json: gltf::json::Value = gltf::json::deserialize::from_slice(&bytes).ok()?;
+    let json: gltf::json::Value = gltf::json::deserialize::from_slice(bytes).ok()?;
     let v = json.get("asset").and_then(|a| a.get("version"));
     let v = match v {
         Some(gltf::json::Value::String(s)) => s.clone(),
@@ -325,27 +318,5 @@ fn convert_light(light: &gltf::khr_lights_punctual::Light, m: Mat4) -> Light {
             cos_inner: inner_cone_angle.cos(),
             cos_outer: outer_cone_angle.cos(),
         },
-    }
-}
-
-/// Converts a decoded glTF image (8-bit grey, RGB or RGBA, sRGB-encoded) to a linear texture.
-fn convert_image(img: &gltf::image::Data) -> Option<Texture> {
-    use gltf::image::Format;
-    match img.format {
-        Format::R8G8B8 => Texture::from_srgb8(img.width, img.height, 3, &img.pixels),
-        Format::R8G8B8A8 => Texture::from_srgb8(img.width, img.height, 4, &img.pixels),
-        Format::R8 => {
-            let rgb: Vec<u8> = img.pixels.iter().flat_map(|&g| [g, g, g]).collect();
-            Texture::from_srgb8(img.width, img.height, 3, &rgb)
-        }
-        Format::R8G8 => {
-            let rgb: Vec<u8> = img
-                .pixels
-                .chunks_exact(2)
-                .flat_map(|p| [p[0], p[0], p[0]])
-                .collect();
-            Texture::from_srgb8(img.width, img.height, 3, &rgb)
-        }
-        _ => None,
     }
 }

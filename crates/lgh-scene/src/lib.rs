@@ -27,6 +27,7 @@ pub mod emitter_room;
 pub mod error;
 pub mod file_kind;
 pub mod gltf_file;
+pub mod gltf_import;
 pub mod light;
 pub mod material;
 pub mod mesh;
@@ -34,12 +35,14 @@ pub mod obj;
 pub mod scene;
 pub mod scene_file;
 pub mod texture;
+pub mod texture_file;
 
 pub use camera::Camera;
 pub use error::SceneError;
 pub use light::Light;
 pub use material::Material;
 pub use mesh::Mesh;
+pub use scene::MAX_COORDINATE;
 pub use scene::{Scene, SceneReport};
 pub use texture::Texture;
 

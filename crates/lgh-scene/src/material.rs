@@ -30,6 +30,16 @@ impl Default for Material {
 }
 
 impl Material {
+    /// True if its colour and emission are finite and not negative (a colour above one is
+    /// clamped where it is used, see [`Material::albedo_at`]).
+    #[must_use]
+    pub fn is_valid(&self) -> bool {
+        self.albedo.is_finite()
+            && self.emission.is_finite()
+            && self.albedo.min_element() >= 0.0
+            && self.emission.min_element() >= 0.0
+    }
+
     /// The albedo at texture coordinate `uv`, clamped to [0, 1] so that no surface creates
     /// energy.
     #[must_use]

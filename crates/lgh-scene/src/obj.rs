@@ -5,14 +5,16 @@
 //! error: the geometry still renders with default materials.
 
 use std::cell::RefCell;
+use std::collections::HashMap;
 use std::io::BufReader;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec2, Vec3};
 
 use crate::error::contain_panics;
 use crate::mesh::Primitive;
-use crate::{Material, Scene, SceneError, Texture};
+use crate::texture_file::{TexelBudget, TextureError};
+use crate::{Material, Scene, SceneError};
 
 /// Loads an OBJ file (and the MTL files it names) into a scene without camera or punctual
 /// lights. Call [`Scene::finish`] (or use [`crate::load`]) before rendering.
@@ -38,16 +40,25 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         .map_err(|e| SceneError::new(path, format!("cannot parse OBJ: {e}")))
     })?;
     let mut scene = Scene::new(file_stem(path));
-    let obj_materials = match materials {
-        Ok(m) => m,
-        Err(e) => {
-            let why = mtl_problem.into_inner().unwrap_or_else(|| e.to_string());
-            scene.report.warnings.push(format!(
-                "material library not loaded ({why}); using a grey default"
-            ));
+    let obj_materials = match (materials, mtl_problem.into_inner()) {
+        (Ok(m), _) => m,
+        (Err(_), Some(MtlProblem(why))) => return Err(SceneError::new(path, why)),
+        (Err(tobj::LoadError::OpenFileFailed), None) => {
+            scene
+                .report
+                .warnings
+                .push("material library not found; using a grey default".to_string());
             Vec::new()
         }
+        (Err(e), None) => {
+            return Err(SceneError::new(
+                path,
+                format!("its material library does not parse: {e}"),
+            ));
+        }
     };
+    let mut budget = TexelBudget::default();
+    let mut loaded = HashMap::new();
     for m in &obj_materials {
         if let Some(illum) = m.illumination_model.filter(|i| (3..=9).contains(i)) {
             let kd = m.diffuse.unwrap_or([0.8; 3]);
@@ -57,10 +68,10 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
                 m.name, kd[0], kd[1], kd[2]
             ));
         }
-        let albedo_texture = m
-            .diffuse_texture
-            .as_deref()
-            .and_then(|name| load_texture(&mut scene, &dir.join(name)));
+        let albedo_texture = match m.diffuse_texture.as_deref() {
+            Some(name) => load_texture(&mut scene, &mut budget, &mut loaded, &dir.join(name))?,
+            None => None,
+        };
         scene.materials.push(Material {
             name: m.name.clone(),
             albedo: m.diffuse.map_or(Vec3::splat(0.8), Vec3::from_array),
@@ -110,45 +121,67 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     Ok(scene)
 }
 
+/// A material library that exists but cannot be used: an error, where a missing library is
+/// a warning (its emitters, the scene's lights, would otherwise vanish behind "no lights").
+struct MtlProblem(String);
+
 /// Reads an MTL file for `tobj`, first checking what its parser would panic on (a colour
 /// with fewer than three numbers); the problem, named by file and line, goes to `problem`.
-fn load_mtl(path: &Path, problem: &RefCell<Option<String>>) -> tobj::MTLLoadResult {
-    let Ok(text) = std::fs::read_to_string(path) else {
-        *problem.borrow_mut() = Some(format!("{}: cannot read", path.display()));
-        return Err(tobj::LoadError::OpenFileFailed);
+fn load_mtl(path: &Path, problem: &RefCell<Option<MtlProblem>>) -> tobj::MTLLoadResult {
+    if !path.exists() {
+        return Err(tobj::LoadError::OpenFileFailed); // a warning: the geometry still renders
+    }
+    let text = crate::file_kind::read_capped(path, crate::file_kind::MAX_TEXT_BYTES, "MTL file")
+        .and_then(|b| String::from_utf8(b).map_err(|_| SceneError::new(path, "not UTF-8 text")));
+    let text = match text {
+        Ok(t) => t,
+        Err(e) => {
+            *problem.borrow_mut() = Some(MtlProblem(e.to_string()));
+            return Err(tobj::LoadError::OpenFileFailed);
+        }
     };
     for (i, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
         if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke")) = words.next()
             && words.count() < 3
         {
-            *problem.borrow_mut() = Some(format!(
+            *problem.borrow_mut() = Some(MtlProblem(format!(
                 "{} line {}: {key} needs three numbers",
                 path.display(),
                 i + 1
-            ));
+            )));
             return Err(tobj::LoadError::MaterialParseError);
         }
     }
     tobj::load_mtl_buf(&mut text.as_bytes())
 }
 
-/// Loads an 8-bit image file as an sRGB texture; on failure records a warning and returns
-/// `None`.
-pub(crate) fn load_texture(scene: &mut Scene, path: &Path) -> Option<u32> {
-    match image::open(path) {
-        Ok(img) => {
-            let rgb = img.to_rgb8();
-            let tex = Texture::from_srgb8(rgb.width(), rgb.height(), 3, rgb.as_raw())?;
+/// Loads an image file as an sRGB texture within `budget`, once per path however many
+/// materials name it; an image that cannot be read is a warning (the material colour is
+/// used), one over the budget an error.
+pub(crate) fn load_texture(
+    scene: &mut Scene,
+    budget: &mut TexelBudget,
+    loaded: &mut HashMap<PathBuf, u32>,
+    path: &Path,
+) -> Result<Option<u32>, SceneError> {
+    if let Some(&i) = loaded.get(path) {
+        return Ok(Some(i));
+    }
+    match budget.decode_file(path) {
+        Ok(tex) => {
             scene.textures.push(tex);
-            Some(scene.textures.len() as u32 - 1)
+            let i = scene.textures.len() as u32 - 1;
+            loaded.insert(path.to_path_buf(), i);
+            Ok(Some(i))
         }
+        Err(TextureError::OverBudget(e)) => Err(SceneError::new(path, e)),
         Err(e) => {
             scene.report.warnings.push(format!(
                 "texture {} not loaded ({e}); using the material colour",
                 path.display()
             ));
-            None
+            Ok(None)
         }
     }
 }

@@ -39,6 +39,11 @@ pub struct SceneReport {
     pub warnings: Vec<String>,
 }
 
+/// The largest coordinate a vertex may have, in scene units, at rest and when an animation
+/// moves it: 1e12 keeps every product of ray tracing and shading (squared distances, areas
+/// of the BVH's boxes) far inside `f32`'s range; a mesh beyond it is refused by name.
+pub const MAX_COORDINATE: f32 = 1e12;
+
 impl Scene {
     /// An empty scene named `name`.
     #[must_use]
@@ -87,6 +92,30 @@ impl Scene {
             return Err(SceneError::new(
                 path,
                 format!("vertex {i} is missing or not finite (NaN or infinite coordinate)"),
+            ));
+        }
+        if let Some((i, p)) = self
+            .mesh
+            .positions
+            .iter()
+            .enumerate()
+            .find(|(_, p)| p.abs().max_element() > MAX_COORDINATE)
+        {
+            return Err(SceneError::new(
+                path,
+                format!(
+                    "vertex {i} at ({}, {}, {}) lies beyond {MAX_COORDINATE:e} units from the origin (the most lgh takes; move the model or change its units)",
+                    p.x, p.y, p.z
+                ),
+            ));
+        }
+        if let Some(m) = self.materials.iter().find(|m| !m.is_valid()) {
+            return Err(SceneError::new(
+                path,
+                format!(
+                    "material '{}': colour {} and emission {} must be finite and not negative",
+                    m.name, m.albedo, m.emission
+                ),
             ));
         }
         if let Some(&m) = self

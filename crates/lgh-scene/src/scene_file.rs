@@ -178,6 +178,15 @@ fn animation(
                 "animation.camera: a keyframe has a non-finite number",
             ));
         }
+        if k.position == k.look_at {
+            return Err(SceneError::new(
+                path,
+                format!(
+                    "animation.camera: the keyframe at time {} looks at its own position",
+                    k.time
+                ),
+            ));
+        }
         out.camera.push(CameraKey {
             time: k.time,
             position: k.position.into(),
@@ -231,6 +240,20 @@ fn animation(
                 "animation.objects: a keyframe has a non-finite number",
             ));
         }
+        if k.translation
+            .iter()
+            .any(|x| x.abs() > crate::MAX_COORDINATE)
+        {
+            return Err(SceneError::new(
+                path,
+                format!(
+                    "animation.objects: the keyframe of \"{}\" at time {} moves it beyond {:e} units (the most lgh takes)",
+                    k.object,
+                    k.time,
+                    crate::MAX_COORDINATE
+                ),
+            ));
+        }
         out.objects.push(ObjectKey {
             object: object as u32,
             time: k.time,
@@ -270,9 +293,10 @@ pub fn resolve_mesh_path(scene_file: &Path, mesh: &str) -> Result<PathBuf, Scene
 /// The file cannot be read or parsed (the message gives the TOML line), the mesh cannot be
 /// loaded, or the finished scene is invalid (see [`Scene::finish`]).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    crate::file_kind::regular_file(path)?;
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| SceneError::new(path, format!("cannot read scene file: {e}")))?;
+    let bytes =
+        crate::file_kind::read_capped(path, crate::file_kind::MAX_TEXT_BYTES, "scene file")?;
+    let text = String::from_utf8(bytes)
+        .map_err(|_| SceneError::new(path, "cannot read scene file: not UTF-8 text"))?;
     let desc: SceneFile = toml::from_str(&text).map_err(|e| {
         let place = e.span().map_or_else(String::new, |span| {
             let before = &text[..span.start.min(text.len())];

@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use lgh_scene::Scene;
 
 use crate::ViewArgs;
@@ -93,7 +93,11 @@ pub fn script_step(args: &ViewArgs, state: &mut ViewState, frame: u64) {
 /// # Errors
 /// A key has no action.
 pub fn check_keys(keys: &[String]) -> Result<()> {
-    if let Some(k) = keys.iter().find(|k| action_of_key(k).is_none()) {
+    let display_only = |k: &str| k.eq_ignore_ascii_case("h") || k.eq_ignore_ascii_case("o");
+    if let Some(k) = keys
+        .iter()
+        .find(|k| action_of_key(k).is_none() && !display_only(k))
+    {
         bail!("--keys: '{k}' is not a key of the viewer (see the controls in `lgh view --help`)");
     }
     Ok(())
@@ -115,8 +119,7 @@ pub fn finish(args: &ViewArgs, state: &ViewState, record: &Record) -> Result<()>
 
 fn write_json(path: &Path, v: &serde_json::Value) -> Result<()> {
     let text = serde_json::to_string_pretty(v)? + "\n";
-    lgh_render::image::write_atomic(path, text.as_bytes())
-        .with_context(|| format!("{}: cannot write statistics", path.display()))
+    Ok(lgh_render::output::write_output(path, text.as_bytes())?)
 }
 
 /// Runs `args.frames` frames of `scene` without a window.
@@ -146,7 +149,7 @@ pub fn run(args: &ViewArgs, scene: Scene) -> Result<()> {
 pub fn start(args: &ViewArgs, scene: Scene) -> Result<(FrameLoop, ViewState)> {
     let settings = args.render_settings();
     settings.validate()?;
-    check_keys(&args.keys)?;
+    args.check()?;
     let camera = scene.camera();
     let engine = FrameLoop::new(scene, settings.exposure, args.accel.kind())?;
     let state = ViewState::new(settings, &camera, engine.world().radius, args.taa);

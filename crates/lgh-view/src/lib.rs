@@ -53,7 +53,7 @@ pub struct ViewArgs {
     /// Start with temporal filtering of the shadows (T toggles it).
     #[arg(long)]
     pub taa: bool,
-    /// Quit after N frames.
+    /// Quit after N frames (at most a million).
     #[arg(long)]
     pub frames: Option<u64>,
     /// Write the last frame shown to this PNG at exit.
@@ -66,18 +66,22 @@ pub struct ViewArgs {
     /// Run the same loop without a window (for tests, CI and benchmarks); needs --frames.
     #[arg(long)]
     pub headless: bool,
-    /// Turn the light by this many degrees every frame (a moving light: VPLs and hierarchy
-    /// are rebuilt each frame, and nothing accumulates).
+    /// Turn the light by this many degrees every frame, in [-360, 360] (a moving light: VPLs
+    /// and hierarchy are rebuilt each frame, and nothing accumulates).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub light_speed: f32,
     /// Keys pressed one per frame from the first frame on, as a script (e.g. "w,w,a,m,l"):
-    /// the same actions as the keyboard.
+    /// the same actions as the keyboard, in either case. H and O, which only toggle what the
+    /// window draws over the frame, change nothing in a script.
     #[arg(long, value_delimiter = ',')]
     pub keys: Vec<String>,
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
 }
+
+/// The most frames `--frames` takes (a million: over four hours at 60 fps).
+pub const MAX_FRAMES: u64 = 1_000_000;
 
 /// The viewer's alpha when `--alpha` is not given: 1.5, for interactive rates (the render
 /// defaults' 3 measured 3.1 fps where the paper's 1 gave 6.0). Against the paper's 1 it
@@ -122,6 +126,37 @@ impl ViewArgs {
         if !given("samples") && lgh_method {
             self.settings.shadows.samples = Some(INTERACTIVE_SHADOW_SAMPLES);
         }
+    }
+
+    /// Checks the flags that the settings' validation does not see, before any work: the
+    /// frame count, the light's speed, the key script, and the output paths (they exist,
+    /// take a file, and are not one file).
+    ///
+    /// # Errors
+    /// The first bad flag, named.
+    pub fn check(&self) -> anyhow::Result<()> {
+        if let Some(n) = self.frames
+            && n > MAX_FRAMES
+        {
+            anyhow::bail!("--frames {n}: at most {MAX_FRAMES}");
+        }
+        if !self.light_speed.is_finite() || self.light_speed.abs() > 360.0 {
+            anyhow::bail!(
+                "--light-speed {}: must be a number of degrees per frame in [-360, 360]",
+                self.light_speed
+            );
+        }
+        headless::check_keys(&self.keys)?;
+        let mut outputs = Vec::new();
+        if let Some(p) = &self.screenshot {
+            lgh_render::image::check_output_path(p)?;
+            outputs.push(("--screenshot", p.as_path()));
+        }
+        if let Some(p) = &self.stats {
+            outputs.push(("--stats", p.as_path()));
+        }
+        lgh_render::output::check_outputs(&outputs)?;
+        Ok(())
     }
 
     /// The starting settings with the frame size of `--size`.

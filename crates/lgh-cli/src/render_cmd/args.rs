@@ -130,20 +130,19 @@ pub fn parse_frames(s: &str) -> Result<(u32, u32), String> {
     Ok((a, b))
 }
 
-/// The output path of frame `f`: the run of '#' in `pattern` replaced by `f`, zero-padded to
+/// The output path of frame `f`: the first run of '#' in the file name of `pattern` replaced by `f`, zero-padded to
 /// the run's length.
 #[must_use]
 pub fn frame_path(pattern: &Path, f: u32) -> PathBuf {
-    let text = pattern.to_string_lossy();
-    let Some(start) = text.find('#') else {
+    let Some(name) = pattern.file_name().map(|n| n.to_string_lossy()) else {
         return pattern.to_path_buf();
     };
-    let len = text[start..].chars().take_while(|&c| c == '#').count();
-    let mut out = String::new();
-    out.push_str(&text[..start]);
-    out.push_str(&format!("{f:0len$}"));
-    out.push_str(&text[start + len..]);
-    PathBuf::from(out)
+    let Some(start) = name.find('#') else {
+        return pattern.to_path_buf();
+    };
+    let len = name[start..].chars().take_while(|&c| c == '#').count();
+    let out = format!("{}{f:0len$}{}", &name[..start], &name[start + len..]);
+    pattern.with_file_name(out)
 }
 
 #[cfg(test)]
@@ -165,5 +164,10 @@ mod tests {
         assert!(parse_frames("0..4000000000").is_err());
         let p = frame_path(std::path::Path::new("out/f_####.png"), 7);
         assert_eq!(p, std::path::PathBuf::from("out/f_0007.png"));
+        // A '#' in a folder's name is not a frame number.
+        let p = frame_path(std::path::Path::new("take#2/f_##.png"), 7);
+        assert_eq!(p, std::path::PathBuf::from("take#2/f_07.png"));
+        let p = frame_path(std::path::Path::new("take#2/still.png"), 7);
+        assert_eq!(p, std::path::PathBuf::from("take#2/still.png"));
     }
 }

@@ -21,9 +21,14 @@ use crate::scene_arg::load_scene;
 
 /// Checks what the library's validation does not: the output files and the sequence flags.
 fn check_args(args: &RenderArgs) -> Result<()> {
-    if args.frames.is_some() && !args.out.to_string_lossy().contains('#') {
+    if args.frames.is_some()
+        && !args
+            .out
+            .file_name()
+            .is_some_and(|n| n.to_string_lossy().contains('#'))
+    {
         bail!(
-            "{}: with --frames the output name needs #### for the frame number (e.g. frames/frame_####.png)",
+            "{}: with --frames the file name needs #### for the frame number (e.g. frames/frame_####.png)",
             args.out.display()
         );
     }
@@ -34,21 +39,21 @@ fn check_args(args: &RenderArgs) -> Result<()> {
     if !args.fps.is_finite() || args.fps <= 0.0 {
         bail!("--fps {}: must be a positive number", args.fps);
     }
-    check_output_path(&frame_path(&args.out, 0))?;
-    if let Some(stats) = &args.stats
-        && let Some(dir) = stats.parent()
-        && !dir.as_os_str().is_empty()
-        && !dir.is_dir()
-    {
-        bail!(
-            "{}: output folder {} does not exist",
-            stats.display(),
-            dir.display()
-        );
-    }
+    let out = if args.frames.is_some() {
+        frame_path(&args.out, 0)
+    } else {
+        args.out.clone()
+    };
+    check_output_path(&out)?;
+    let mut outputs = vec![("-o", out.as_path())];
     if let Some(h) = &args.heatmap {
         check_output_path(h)?;
+        outputs.push(("--heatmap", h));
     }
+    if let Some(s) = &args.stats {
+        outputs.push(("--stats", s));
+    }
+    lgh_render::output::check_outputs(&outputs)?;
     Ok(())
 }
 
@@ -64,8 +69,13 @@ fn run_sequence(
     let mut seq = Sequence::new(args.taa.then_some(args.temporal));
     let mut per_frame = Vec::new();
     for f in first..end {
+        world
+            .check_time(f as f32 / args.fps)
+            .map_err(|e| anyhow::anyhow!("frame {f}: {e}"))?;
+    }
+    for f in first..end {
         let update = Instant::now();
-        world.set_time(f as f32 / args.fps);
+        world.set_time(f as f32 / args.fps)?;
         let update_ms = update.elapsed().as_secs_f64() * 1e3;
         let mut s = settings.clone();
         s.seed = settings.seed.wrapping_add(u64::from(f));

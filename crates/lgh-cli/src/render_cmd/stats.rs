@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use lgh_render::budget::MemoryEstimate;
 use lgh_render::passes::vpl_gen::PathNumbers;
 use lgh_render::{Frame, Method, RenderSettings};
@@ -145,6 +145,5 @@ impl<'a> FrameReport<'a> {
 /// The file cannot be written.
 pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
     let text = serde_json::to_string_pretty(value)? + "\n";
-    lgh_render::image::write_atomic(path, text.as_bytes())
-        .with_context(|| format!("{}: cannot write statistics", path.display()))
+    Ok(lgh_render::output::write_output(path, text.as_bytes())?)
 }

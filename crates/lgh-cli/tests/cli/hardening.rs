@@ -66,13 +66,20 @@ fn gltf_accessors_and_buffers_are_checked_before_reading() {
     bin[40..42].copy_from_slice(&60000u16.to_le_bytes());
     std::fs::write(d.join("tri.bin"), &bin).unwrap();
     assert_error(&run(&p), &["index.gltf", "accessor 1", "index 60000"]);
-    // Two billion indices in a 6-byte view.
-    let many = r#"{"bufferView":1,"componentType":5123,"count":2000000000,"type":"SCALAR"}"#;
+    // Thirty thousand indices in a 6-byte view.
+    let many = r#"{"bufferView":1,"componentType":5123,"count":30000,"type":"SCALAR"}"#;
     let p = gltf(&d, "count.gltf", 4, &format!("{POSITIONS},{many}"), VIEWS);
-    assert_error(
-        &run(&p),
-        &["count.gltf", "accessor 1", "2000000000 elements"],
+    assert_error(&run(&p), &["count.gltf", "accessor 1", "30000 elements"]);
+    // Two billion: refused by the count of triangles, before any accessor is read.
+    let many = r#"{"bufferView":1,"componentType":5123,"count":2000000000,"type":"SCALAR"}"#;
+    let p = gltf(
+        &d,
+        "billions.gltf",
+        4,
+        &format!("{POSITIONS},{many}"),
+        VIEWS,
     );
+    assert_error(&run(&p), &["billions.gltf", "666666666 triangles"]);
     // Four billion positions.
     let huge = r#"{"bufferView":0,"componentType":5126,"count":4000000000,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}"#;
     let p = gltf(&d, "positions.gltf", 4, &format!("{huge},{INDICES}"), VIEWS);
@@ -100,14 +107,18 @@ fn obj_and_mtl_problems_are_named() {
     };
     let obj =
         "mtllib m.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nusemtl mirror\nf 1 3 2\nf 1 4 3\n";
-    // A colour with two numbers made tobj panic (found by the fuzzer): now a warning naming
-    // the line, and the mesh renders with the default material.
+    // A colour with two numbers made tobj panic (found by the fuzzer): now an error naming
+    // the line (a warning hid it behind "no lights" when the library held the emitters).
     w("m.mtl", "newmtl mirror\nKd 0.8 0.8\n");
     let p = w("short.obj", obj);
     let run =
         |p: &std::path::Path| lgh(&["render", s(p), "--out", o, "--size", "16x9", "--vpls", "50"]);
-    let r = run(&p);
-    assert_warns(&r, &["m.mtl line 2: Kd needs three numbers"]);
+    assert_error(&run(&p), &["m.mtl line 2: Kd needs three numbers"]);
+    // A line tobj cannot parse is an error too; a missing library is a warning.
+    w("m.mtl", "newmtl mirror\nKd a b c\n");
+    assert_error(&run(&p), &["short.obj", "material library does not parse"]);
+    std::fs::remove_file(d.join("m.mtl")).unwrap();
+    assert_warns(&run(&p), &["material library not found"]);
     // A mirror is named: lgh renders it diffuse.
     w(
         "m.mtl",

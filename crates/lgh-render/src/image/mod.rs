@@ -106,42 +106,39 @@ impl Image {
     }
 
     /// Writes the image; the format follows the extension. `exposure` scales the radiance
-    /// before tone mapping (PNG only). The file appears whole or not at all: it is written
-    /// under a temporary name in the same folder and renamed.
+    /// before tone mapping (PNG only). The file appears whole or not at all, and only a
+    /// regular file is ever replaced (see [`crate::output`]).
     ///
     /// # Errors
-    /// Unknown extension, missing folder, or a write error.
+    /// Unknown extension, missing folder, a path that is not a file, or a write error.
     pub fn save(&self, path: &Path, exposure: f32) -> Result<(), ImageError> {
         match ImageFormat::from_path(path)? {
             ImageFormat::Png => {
                 let bytes = tonemap_to_srgb8(&self.pixels, exposure);
                 save_png(path, self.width, self.height, &bytes)
             }
-            ImageFormat::Exr => self.save_exr(path),
+            ImageFormat::Exr => {
+                let bytes = self
+                    .encode_exr()
+                    .map_err(|e| ImageError::new(path, format!("cannot encode EXR: {e}")))?;
+                write_atomic(path, &bytes)
+            }
         }
     }
 
-    /// Writes the image as a linear OpenEXR file (see [`Image::save`]).
-    fn save_exr(&self, path: &Path) -> Result<(), ImageError> {
-        check_output_dir(path)?;
-        let tmp = partial_path(path);
-        let result = exr::prelude::write_rgb_file(
-            &tmp,
-            self.width as usize,
-            self.height as usize,
-            |x, y| {
-                let p = finite_or_zero(self.pixels[y * self.width as usize + x]);
-                (p.x, p.y, p.z)
-            },
-        )
-        .map_err(|e| e.to_string());
-        match result.and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string())) {
-            Ok(()) => Ok(()),
-            Err(e) => {
-                let _ = std::fs::remove_file(&tmp);
-                Err(ImageError::new(path, format!("cannot write image: {e}")))
-            }
-        }
+    /// The image as the bytes of a linear 32-bit float OpenEXR file.
+    fn encode_exr(&self) -> exr::error::Result<Vec<u8>> {
+        use exr::prelude::{Image as ExrImage, SpecificChannels, Vec2, WritableImage};
+        let w = self.width as usize;
+        let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+            let p = finite_or_zero(self.pixels[y * w + x]);
+            (p.x, p.y, p.z)
+        });
+        let mut out = std::io::Cursor::new(Vec::new());
+        ExrImage::from_channels((w, self.height as usize), channels)
+            .write()
+            .to_buffered(&mut out)?;
+        Ok(out.into_inner())
     }
 
     /// Reads an EXR (linear, first RGB(A) layer) or PNG (8- or 16-bit; the sRGB curve is
@@ -219,69 +216,35 @@ fn check_exr_header(path: &Path) -> Result<(), ImageError> {
     Ok(())
 }
 
-/// Writes `bytes` to `path` so that the file appears whole or not at all: under a temporary
-/// name in the same folder, then renamed (the temporary file is removed on failure).
+/// Writes `bytes` to `path`, whole or not at all (see [`crate::output::write_output`]).
 ///
 /// # Errors
-/// The file cannot be written or renamed.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let tmp = partial_path(path);
-    std::fs::write(&tmp, bytes)
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .inspect_err(|_| {
-            let _ = std::fs::remove_file(&tmp);
-        })
+/// The path cannot be written.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
+    crate::output::write_output(path, bytes).map_err(|e| ImageError::new(path, e.message))
 }
 
 /// Writes 8-bit sRGB `rgb` of `width` x `height` pixels as a PNG, whole or not at all (see
 /// [`Image::save`]).
 ///
 /// # Errors
-/// Missing folder, a buffer of the wrong size, or a write error.
+/// A buffer of the wrong size, or the path cannot be written.
 pub fn save_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ImageError> {
-    check_output_dir(path)?;
-    let tmp = partial_path(path);
-    image::save_buffer_with_format(
-        &tmp,
-        rgb,
-        width,
-        height,
-        image::ExtendedColorType::Rgb8,
-        image::ImageFormat::Png,
-    )
-    .map_err(|e| e.to_string())
-    .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()))
-    .map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        ImageError::new(path, format!("cannot write image: {e}"))
-    })
+    use image::ImageEncoder;
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes)
+        .write_image(rgb, width, height, image::ExtendedColorType::Rgb8)
+        .map_err(|e| ImageError::new(path, format!("cannot encode PNG: {e}")))?;
+    write_atomic(path, &bytes)
 }
 
-/// The temporary name of `path` while it is written: `.NAME.partial` beside it.
-fn partial_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.partial"))
-}
-
-/// Fails early, before any rendering, if `path` cannot be an output image: unknown extension
-/// or a folder that does not exist.
+/// Fails early, before any rendering, if `path` cannot be an output image: unknown
+/// extension, a folder that does not exist or takes no new file, or a path that is a folder
+/// or block device (see [`crate::output::check_output`]).
 ///
 /// # Errors
 /// As above, naming the path.
 pub fn check_output_path(path: &Path) -> Result<(), ImageError> {
     ImageFormat::from_path(path)?;
-    check_output_dir(path)
-}
-
-fn check_output_dir(path: &Path) -> Result<(), ImageError> {
-    match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => Err(ImageError::new(
-            path,
-            format!("output folder {} does not exist", dir.display()),
-        )),
-        _ => Ok(()),
-    }
+    crate::output::check_output(path).map_err(|e| ImageError::new(path, e.message))
 }

@@ -159,17 +159,29 @@ impl std::fmt::Debug for Accel {
     }
 }
 
-/// Every triangle's box, padded by 1e-4 of the scene's size: the input of a BVH build (obvhs
-/// here, the GPU backend's too). Flat axis-aligned walls otherwise give boxes of zero
-/// thickness, which slow traversal by an order of magnitude (docs/design.md, "Ray tracing").
+/// Every triangle's box, padded by 1e-4 to 2e-4 of the scene's size: the input of a BVH
+/// build (obvhs here, the GPU backend's too). Flat axis-aligned walls otherwise give boxes of
+/// zero thickness, which slow traversal by an order of magnitude (docs/design.md, "Ray
+/// tracing"). Each side's pad differs, from a hash of the triangle and side: coincident
+/// triangles (copies of one, or a scene whose units make its triangles equal in `f32`) would
+/// otherwise give equal boxes, whose ties make obvhs's PLOC merge one pair per sweep, a
+/// quadratic build (10^5 copies of a triangle: minutes; with the jitter, 0.1 s).
 #[must_use]
 pub fn padded_boxes(mesh: &Mesh) -> Vec<Aabb> {
     let (lo, hi) = mesh.bounds();
-    let pad = Vec3A::splat(1e-4 * (hi - lo).max_element().max(1e-6));
+    let pad = 1e-4 * (hi - lo).max_element().max(1e-6);
+    let jitter = |t: usize, side: u64| {
+        let h = lgh_core::rng::hash(&[t as u64, side]);
+        let [a, b, c] = [0, 21, 42].map(|s| ((h >> s) & 0x1f_ffff) as f32 / (1 << 21) as f32);
+        Vec3A::new(a, b, c).mul_add(Vec3A::splat(pad), Vec3A::splat(pad))
+    };
     (0..mesh.len())
         .map(|t| {
             let [a, b, c] = mesh.vertices(t).map(Vec3A::from);
-            Aabb::new(a.min(b).min(c) - pad, a.max(b).max(c) + pad)
+            Aabb::new(
+                a.min(b).min(c) - jitter(t, 0),
+                a.max(b).max(c) + jitter(t, 1),
+            )
         })
         .collect()
 }

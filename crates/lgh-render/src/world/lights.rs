@@ -73,6 +73,9 @@ pub struct LightSet {
     pub emitters: Vec<Emitter>,
     by_radiant_area: Option<Distribution1D>,
     by_power: Option<Distribution1D>,
+    /// The punctual lights alone by power: the direct pass samples them where there are
+    /// more than [`crate::direct::EXACT_PUNCTUAL`].
+    pub punctual_by_power: Option<Distribution1D>,
     centre: Vec3,
     radius: f32,
 }
@@ -109,11 +112,13 @@ impl LightSet {
             emitters,
             by_radiant_area: Distribution1D::new(&radiant_area),
             by_power: None,
+            punctual_by_power: None,
             centre,
             radius,
         };
         let powers: Vec<f32> = (0..set.len()).map(|i| luminance(set.power(i))).collect();
         set.by_power = Distribution1D::new(&powers);
+        set.punctual_by_power = Distribution1D::new(&powers[..set.punctual.len()]);
         set
     }
 

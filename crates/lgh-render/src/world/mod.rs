@@ -116,16 +116,36 @@ impl World {
     /// scene's animation and rebuilds the light tables. If objects move, the BVH is rebuilt
     /// (in parallel; a full rebuild keeps its quality, where a refit would degrade as objects
     /// travel). The bounding sphere and the ray offset stay those of the loaded scene.
-    pub fn set_time(&mut self, t: f32) {
+    ///
+    /// # Errors
+    /// The animation makes the scene unrenderable at `t` (see [`World::check_time`]), or
+    /// moves geometry out of range; the world is then unchanged.
+    pub fn set_time(&mut self, t: f32) -> Result<(), crate::RenderError> {
         if self.scene.animation.is_empty() {
-            return;
+            return Ok(());
         }
+        self.check_time(t)?;
         let anim = &self.scene.animation;
         self.scene.camera = self.rest.0.as_ref().map(|c| anim.camera_at(c, t));
         self.scene.lights = anim.lights_at(&self.rest.1, t);
         if let Some(rest) = &self.rest_mesh
             && anim.pose_mesh(rest, t, &mut self.scene.mesh)
         {
+            // Keyframes within lgh_scene::MAX_COORDINATE keep the posed mesh within a few
+            // times it; this bounds what the BVH builder sees whatever the keyframes say.
+            let limit = 8.0 * lgh_scene::MAX_COORDINATE;
+            if let Some(p) = self
+                .scene
+                .mesh
+                .positions
+                .iter()
+                .find(|p| !(p.abs().max_element() <= limit))
+            {
+                return Err(crate::RenderError::Animation {
+                    time: t,
+                    message: format!("the animation moves a vertex to {p}, out of range"),
+                });
+            }
             // A moving mesh is rebuilt every frame: the fastest build of the same backend.
             self.accel = Accel::build_with(&self.scene.mesh, self.accel.kind(), BuildUse::Rebuilt)
                 .unwrap_or_else(|_| Accel::build(&self.scene.mesh));
@@ -133,6 +153,28 @@ impl World {
             self.geometry_id = next_geometry_id();
         }
         self.lights = LightSet::new(&self.scene, self.radius);
+        Ok(())
+    }
+
+    /// Checks, without moving anything, that the animation's camera at time `t` is usable
+    /// (interpolated keyframes can pass through their look-at point): a sequence checks all
+    /// its frames before rendering the first.
+    ///
+    /// # Errors
+    /// [`crate::RenderError::Animation`] naming the time.
+    pub fn check_time(&self, t: f32) -> Result<(), crate::RenderError> {
+        if let Some(c) = &self.rest.0
+            && !self.scene.animation.camera.is_empty()
+            && !self.scene.animation.camera_at(c, t).is_valid()
+        {
+            return Err(crate::RenderError::Animation {
+                time: t,
+                message:
+                    "the interpolated camera looks at its own position, or along its up vector"
+                        .into(),
+            });
+        }
+        Ok(())
     }
 
     /// Places the camera and the punctual lights (an interactive viewer moving them) and

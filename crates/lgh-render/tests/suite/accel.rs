@@ -106,7 +106,7 @@ fn moving_objects_rebuild_the_bvh() {
     let block = scene.mesh.object_id("tall_block");
     let mut world = lgh_render::World::new(scene);
     let rest = world.scene.mesh.clone();
-    world.set_time(2.0);
+    world.set_time(2.0).unwrap();
     let posed = &world.scene.mesh;
     let mut moved = 0;
     for (v, (p, r)) in posed.positions.iter().zip(&rest.positions).enumerate() {

@@ -172,7 +172,7 @@ fn moving_objects_rebuild_embree_too() {
         .finish(std::path::Path::new("<built-in cornell-moving-block>"))
         .expect("scene");
     let mut world = World::with_accel(scene, AccelKind::Embree).expect("embree");
-    world.set_time(1.5);
+    world.set_time(1.5).unwrap();
     assert_eq!(world.accel.kind(), AccelKind::Embree);
     let r = compare(&world.scene.mesh, 50_000, 3);
     assert!(r.wrong as f64 <= 1e-4 * r.rays as f64, "{r:?}");

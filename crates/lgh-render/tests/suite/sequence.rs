@@ -29,7 +29,7 @@ fn three_frames() -> Vec<Frame> {
     let mut seq = Sequence::new(Some(TemporalSettings::default()));
     (0..3)
         .map(|f| {
-            world.set_time(f as f32);
+            world.set_time(f as f32).unwrap();
             seq.render(&world, &settings(10 + f), &Silent).unwrap()
         })
         .collect()
@@ -73,7 +73,7 @@ fn temporal_filtering_reduces_flicker() {
         s.finish(std::path::Path::new("<built-in>")).unwrap();
         s
     });
-    world.set_time(0.0);
+    world.set_time(0.0).unwrap();
     let run = |taa: Option<TemporalSettings>, shadow_samples: u32, paper: bool| {
         let mut seq = Sequence::new(taa);
         let mut prev: Option<Vec<glam::Vec3>> = None;
@@ -133,7 +133,7 @@ fn a_moving_object_sequence_is_deterministic_and_moves() {
         [0.0f32, 2.0]
             .iter()
             .map(|&t| {
-                world.set_time(t);
+                world.set_time(t).unwrap();
                 seq.render(&world, &settings(3), &Silent).unwrap()
             })
             .collect::<Vec<_>>()
@@ -165,7 +165,7 @@ fn recycled_frames_do_not_change_the_next_ones() {
         .into_iter()
         .enumerate()
     {
-        world.set_time(f as f32 * 0.7);
+        world.set_time(f as f32 * 0.7).unwrap();
         let s = RenderSettings {
             width: w,
             height: h,

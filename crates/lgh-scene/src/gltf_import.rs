@@ -1,0 +1,200 @@
+//! Reading a glTF file's buffers and images within budgets, where `gltf::import` would read
+//! whatever its URIs name to the end (/dev/zero never ends, a FIFO blocks) and decode every
+//! image at whatever size its header promises:
+//!
+//! - the `.gltf`/`.glb` file and every buffer and image file must be regular files; a buffer
+//!   file is read up to its `byteLength` and no further;
+//! - images are decoded within the texel budget ([`crate::texture_file`]);
+//! - the triangles that the node tree instances are counted, from the accessors' counts,
+//!   before any is flattened ([`instanced_triangles`], at most [`MAX_TRIANGLES`]).
+
+use std::path::{Path, PathBuf};
+
+use base64::Engine;
+use gltf::Document;
+use gltf::buffer::Data;
+
+use crate::file_kind::{read_capped, read_exactly};
+use crate::texture_file::{TexelBudget, TextureError};
+use crate::{SceneError, Texture};
+
+/// The most triangles a scene may have after instancing: 16M, a few GB with the BVH.
+pub const MAX_TRIANGLES: u64 = 1 << 24;
+
+/// The largest `.gltf` or `.glb` file read: 2 GiB.
+const MAX_GLTF_BYTES: u64 = 2 << 30;
+
+/// A glTF document with its buffers, and its images as textures (`None`: not readable, with a
+/// warning in `warnings`).
+pub(crate) struct Import {
+    pub document: Document,
+    pub buffers: Vec<Data>,
+    pub textures: Vec<Option<Texture>>,
+    pub warnings: Vec<String>,
+}
+
+/// Reads `path` as described in the module documentation.
+pub(crate) fn import(path: &Path) -> Result<Import, SceneError> {
+    let bytes = read_capped(path, MAX_GLTF_BYTES, "glTF file")?;
+    let gltf::Gltf { document, mut blob } = gltf::Gltf::from_slice(&bytes).map_err(|e| {
+        let message = match crate::gltf_file::old_version(&bytes) {
+            Some(v) => format!("glTF {v} is not supported (lgh reads glTF 2.0)"),
+            None => format!("cannot load glTF: {e}"),
+        };
+        SceneError::new(path, message)
+    })?;
+    drop(bytes);
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut buffers = Vec::new();
+    for b in document.buffers() {
+        let len = b.length() as u64;
+        let at = |m: String| SceneError::new(path, format!("buffer {}: {m}", b.index()));
+        let mut data = match b.source() {
+            gltf::buffer::Source::Bin => blob
+                .take()
+                .ok_or_else(|| at("the GLB file has no binary chunk".into()))?,
+            gltf::buffer::Source::Uri(uri) => match data_uri(uri) {
+                Some(encoded) => decode_base64(encoded).map_err(at)?,
+                None => read_exactly(&file_uri(dir, uri).map_err(at)?, len)?,
+            },
+        };
+        if (data.len() as u64) < len {
+            return Err(at(format!(
+                "holds {} bytes where its byteLength says {len}",
+                data.len()
+            )));
+        }
+        data.truncate(len as usize);
+        while data.len() % 4 != 0 {
+            data.push(0);
+        }
+        buffers.push(Data(data));
+    }
+    let triangles = instanced_triangles(&document);
+    if triangles > MAX_TRIANGLES {
+        return Err(SceneError::new(
+            path,
+            format!(
+                "its node tree places {triangles} triangles, more than the {MAX_TRIANGLES} lgh takes"
+            ),
+        ));
+    }
+    let mut budget = TexelBudget::default();
+    let mut textures = Vec::new();
+    let mut warnings = Vec::new();
+    for img in document.images() {
+        let decoded = match img.source() {
+            gltf::image::Source::View { view, .. } => {
+                let start = view.offset();
+                let bytes = buffers
+                    .get(view.buffer().index())
+                    .and_then(|b| b.0.get(start..start.checked_add(view.length())?));
+                match bytes {
+                    Some(bytes) => budget.decode_bytes(bytes),
+                    None => Err(TextureError::Unreadable(
+                        "its buffer view lies outside its buffer".into(),
+                    )),
+                }
+            }
+            gltf::image::Source::Uri { uri, .. } => match data_uri(uri) {
+                Some(encoded) => decode_base64(encoded)
+                    .map_err(TextureError::Unreadable)
+                    .and_then(|b| budget.decode_bytes(&b)),
+                None => file_uri(dir, uri)
+                    .map_err(TextureError::Unreadable)
+                    .and_then(|p| budget.decode_file(&p)),
+            },
+        };
+        textures.push(match decoded {
+            Ok(t) => Some(t),
+            Err(TextureError::OverBudget(m)) => {
+                return Err(SceneError::new(path, format!("image {}: {m}", img.index())));
+            }
+            Err(TextureError::Unreadable(m)) => {
+                warnings.push(format!(
+                    "image {} not loaded ({m}); using the material colour",
+                    img.index()
+                ));
+                None
+            }
+        });
+    }
+    Ok(Import {
+        document,
+        buffers,
+        textures,
+        warnings,
+    })
+}
+
+/// The base64 text of a `data:` URI.
+fn data_uri(uri: &str) -> Option<&str> {
+    let rest = uri.strip_prefix("data:")?;
+    Some(rest.split_once(";base64,").map_or(rest, |(_, b)| b))
+}
+
+fn decode_base64(text: &str) -> Result<Vec<u8>, String> {
+    base64::engine::general_purpose::STANDARD
+        .decode(text)
+        .map_err(|e| format!("bad base64 data: {e}"))
+}
+
+/// The file a non-`data:` URI names: `file:` URIs as they are, relative ones (percent-decoded)
+/// against the glTF file's folder; other schemes are not read.
+fn file_uri(dir: &Path, uri: &str) -> Result<PathBuf, String> {
+    if let Some(rest) = uri
+        .strip_prefix("file://")
+        .or_else(|| uri.strip_prefix("file:"))
+    {
+        return Ok(PathBuf::from(rest));
+    }
+    if uri.contains(':') {
+        return Err(format!("the URI scheme of \"{uri}\" is not supported"));
+    }
+    let name = urlencoding::decode(uri).map_err(|_| format!("\"{uri}\" is not valid UTF-8"))?;
+    Ok(dir.join(&*name))
+}
+
+/// The triangles of the default scene's node tree, each mesh counted once per node that
+/// places it: from the accessors' counts, before any index is read. Node trees that are not
+/// trees (a node with two parents, a cycle) are counted up to a repeat; the loader refuses
+/// them afterwards.
+#[must_use]
+pub fn instanced_triangles(doc: &Document) -> u64 {
+    use gltf::mesh::Mode;
+    let per_mesh: Vec<u64> = doc
+        .meshes()
+        .map(|m| {
+            m.primitives()
+                .map(|p| {
+                    let n = p.indices().map_or_else(
+                        || p.get(&gltf::Semantic::Positions).map_or(0, |a| a.count()),
+                        |a| a.count(),
+                    ) as u64;
+                    match p.mode() {
+                        Mode::Triangles => n / 3,
+                        Mode::TriangleStrip | Mode::TriangleFan => n.saturating_sub(2),
+                        _ => 0,
+                    }
+                })
+                .sum()
+        })
+        .collect();
+    let Some(scene) = doc.default_scene().or_else(|| doc.scenes().next()) else {
+        return 0;
+    };
+    let mut seen = vec![false; doc.nodes().len()];
+    let mut stack: Vec<gltf::Node> = scene.nodes().collect();
+    let mut total = 0u64;
+    while let Some(node) = stack.pop() {
+        match seen.get_mut(node.index()) {
+            Some(s) if !*s => *s = true,
+            _ => continue,
+        }
+        if let Some(m) = node.mesh() {
+            total = total.saturating_add(per_mesh.get(m.index()).copied().unwrap_or(0));
+        }
+        stack.extend(node.children());
+    }
+    total
+}

@@ -1,0 +1,157 @@
+//! Texture images decoded within a budget: a small file can promise a huge image (a 31 KB
+//! 1-bit PNG decodes to 3.9 GB of texels), so the header's size is checked against
+//! [`MAX_TEXTURE_TEXELS`] and what is left of the scene's [`MAX_SCENE_TEXELS`] before any
+//! pixel is decoded, and the decoder itself is limited to that allocation.
+
+use std::io::{BufRead, Cursor, Seek};
+use std::path::Path;
+
+use image::{ImageReader, Limits};
+
+use crate::Texture;
+
+/// Texels one texture may have: 64M (8192 x 8192), 768 MiB as linear RGB.
+pub const MAX_TEXTURE_TEXELS: u64 = 1 << 26;
+
+/// Texels all textures of a scene may have together: 128M, 1.5 GiB as linear RGB.
+pub const MAX_SCENE_TEXELS: u64 = 1 << 27;
+
+/// Why a texture was not decoded.
+#[derive(Debug)]
+pub(crate) enum TextureError {
+    /// The image is larger than the budget allows: the scene cannot be loaded as asked.
+    OverBudget(String),
+    /// The image cannot be read or decoded: the material colour stands in.
+    Unreadable(String),
+}
+
+impl std::fmt::Display for TextureError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::OverBudget(m) | Self::Unreadable(m) => f.write_str(m),
+        }
+    }
+}
+
+/// What is left of a scene's texel budget as its textures are decoded.
+#[derive(Debug)]
+pub(crate) struct TexelBudget {
+    left: u64,
+}
+
+impl Default for TexelBudget {
+    fn default() -> Self {
+        Self {
+            left: MAX_SCENE_TEXELS,
+        }
+    }
+}
+
+impl TexelBudget {
+    /// Decodes the image file at `path` as an sRGB texture.
+    pub(crate) fn decode_file(&mut self, path: &Path) -> Result<Texture, TextureError> {
+        crate::file_kind::regular_file(path).map_err(|e| TextureError::Unreadable(e.message))?;
+        let open = || -> Result<_, String> {
+            ImageReader::open(path)
+                .map_err(|e| e.to_string())?
+                .with_guessed_format()
+                .map_err(|e| e.to_string())
+        };
+        self.decode(open)
+    }
+
+    /// Decodes an image held in memory (a glTF buffer view or data URI).
+    pub(crate) fn decode_bytes(&mut self, bytes: &[u8]) -> Result<Texture, TextureError> {
+        let open = || {
+            ImageReader::new(Cursor::new(bytes))
+                .with_guessed_format()
+                .map_err(|e| e.to_string())
+        };
+        self.decode(open)
+    }
+
+    /// Reads the size from the header of one reader, checks it, then decodes with a second
+    /// reader limited to that size.
+    fn decode<R: BufRead + Seek>(
+        &mut self,
+        open: impl Fn() -> Result<ImageReader<R>, String>,
+    ) -> Result<Texture, TextureError> {
+        let unreadable = TextureError::Unreadable;
+        let (w, h) = open()
+            .map_err(unreadable)?
+            .into_dimensions()
+            .map_err(|e| unreadable(e.to_string()))?;
+        let texels = u64::from(w) * u64::from(h);
+        if texels > MAX_TEXTURE_TEXELS {
+            return Err(TextureError::OverBudget(format!(
+                "{w}x{h} texels, more than the {MAX_TEXTURE_TEXELS} a texture may have"
+            )));
+        }
+        if texels > self.left {
+            return Err(TextureError::OverBudget(format!(
+                "{w}x{h} texels, more than the {} left of the {MAX_SCENE_TEXELS} all textures of a scene may have",
+                self.left
+            )));
+        }
+        let mut reader = open().map_err(unreadable)?;
+        let mut limits = Limits::default();
+        limits.max_image_width = Some(w);
+        limits.max_image_height = Some(h);
+        // The widest decoded pixel: 4 channels of 32-bit float.
+        limits.max_alloc = Some(texels * 16 + (1 << 20));
+        reader.limits(limits);
+        let rgb = reader
+            .decode()
+            .map_err(|e| unreadable(e.to_string()))?
+            .to_rgb8();
+        let tex = Texture::from_srgb8(rgb.width(), rgb.height(), 3, rgb.as_raw())
+            .ok_or_else(|| unreadable("an empty image".into()))?;
+        self.left -= texels;
+        Ok(tex)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 1-bit greyscale PNG header of `w` x `h` with no pixel data: enough for the size.
+    fn png_of(w: u32, h: u32) -> Vec<u8> {
+        let img = image::GrayImage::new(1, 1);
+        let mut bytes = Vec::new();
+        img.write_to(&mut Cursor::new(&mut bytes), image::ImageFormat::Png)
+            .unwrap();
+        // Patch the IHDR's width and height (bytes 16..24); the CRC no longer matches, which
+        // the size check never reaches.
+        bytes[16..20].copy_from_slice(&w.to_be_bytes());
+        bytes[20..24].copy_from_slice(&h.to_be_bytes());
+        bytes
+    }
+
+    #[test]
+    fn a_huge_image_is_refused_before_decoding() {
+        let mut budget = TexelBudget::default();
+        let e = budget
+            .decode_bytes(&png_of(20_000, 20_000))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("20000x20000"), "{e}");
+        assert_eq!(budget.left, MAX_SCENE_TEXELS);
+    }
+
+    #[test]
+    fn the_scene_budget_runs_out() {
+        let mut budget = TexelBudget { left: 3 };
+        let mut bytes = Vec::new();
+        image::RgbImage::new(2, 1)
+            .write_to(&mut Cursor::new(&mut bytes), image::ImageFormat::Png)
+            .unwrap();
+        assert!(budget.decode_bytes(&bytes).is_ok());
+        assert_eq!(budget.left, 1);
+        let e = budget.decode_bytes(&bytes).unwrap_err();
+        assert!(
+            matches!(&e, TextureError::OverBudget(m) if m.contains("left of the")),
+            "{e}"
+        );
+    }
+}
