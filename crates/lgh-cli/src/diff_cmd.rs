@@ -21,7 +21,7 @@ pub struct DiffArgs {
     #[arg(long)]
     pub json: bool,
     /// Exposure applied to EXR inputs before tone mapping them for FLIP (PNG inputs are
-    /// compared as they are).
+    /// compared as they are); a positive number.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
     /// Also write a signed error map to this PNG: per pixel (lum(A) - lum(B)) / mean lum(B),
@@ -35,6 +35,19 @@ pub struct DiffArgs {
 }
 
 pub fn run(args: &DiffArgs) -> Result<()> {
+    if !args.exposure.is_finite() || args.exposure <= 0.0 {
+        anyhow::bail!("--exposure {}: must be a positive number", args.exposure);
+    }
+    let mut outputs = Vec::new();
+    if let Some(p) = &args.map {
+        lgh_render::image::check_output_path(p)?;
+        outputs.push(("--map", p.as_path()));
+    }
+    if let Some(p) = &args.flip_map {
+        lgh_render::image::check_output_path(p)?;
+        outputs.push(("--flip-map", p.as_path()));
+    }
+    lgh_render::output::check_outputs(&outputs)?;
     let a = Image::load(&args.a)?;
     let b = Image::load(&args.b)?;
     let m =

@@ -9,6 +9,9 @@
 //! [`SLOW_CASE_MS`]. Panics the glTF loader contains (and reports as an error) are counted
 //! apart, since they are bugs of the `gltf` crate that lgh survives.
 //!
+//! Beside the mutations, [`hostile`] runs hand-made cases by class: special files where a
+//! file is read, decompression and allocation bombs, instancing.
+//!
 //! Cases are numbered; case `i` of seed `s` is the same input on every machine and thread
 //! count, so a finding is reproduced with `lgh-fuzz --seed s --first i --cases 1`.
 #![deny(missing_docs)]
@@ -17,6 +20,7 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+pub mod hostile;
 pub mod mutate;
 pub mod seeds;
 
@@ -255,7 +259,7 @@ pub fn write_seeds(dir: &Path) -> std::io::Result<()> {
 }
 
 /// A panic payload as text.
-fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+pub(crate) fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     payload
         .downcast_ref::<&str>()
         .map(|s| (*s).to_string())

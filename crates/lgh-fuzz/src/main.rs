@@ -80,7 +80,17 @@ fn main() -> ExitCode {
         report.findings.len(),
         report.max_ms
     );
-    if report.findings.is_empty() {
+    let hostile = lgh_fuzz::hostile::run(&args.work_dir.join("hostile"));
+    let hostile_findings: Vec<_> = hostile.iter().filter(|o| o.result.is_err()).collect();
+    println!(
+        "{} hostile cases (special files, bombs, instancing): {} findings",
+        hostile.len(),
+        hostile_findings.len()
+    );
+    for o in &hostile_findings {
+        println!("hostile case {} ({:?}): {:?}", o.name, o.class, o.result);
+    }
+    if report.findings.is_empty() && hostile_findings.is_empty() {
         return ExitCode::SUCCESS;
     }
     let _ = std::fs::create_dir_all(&args.findings);

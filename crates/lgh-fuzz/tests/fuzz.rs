@@ -52,3 +52,27 @@ fn the_seeds_load_and_render() {
     assert!(lgh_render::Image::load(&dir.join("image.exr")).is_ok());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The hand-made hostile classes (special files, bombs, instancing): every case is refused or
+/// loads, none panics, hangs or is slow; and the bombs and the instancing bomb are refused,
+/// not loaded (a deep chain of 20 000 one-triangle nodes is a valid scene and loads).
+#[test]
+fn hostile_cases_by_class_are_refused_in_time() {
+    let dir = std::env::temp_dir().join(format!("lgh-fuzz-hostile-{}", std::process::id()));
+    let outcomes = lgh_fuzz::hostile::run(&dir);
+    let mut bad = Vec::new();
+    for o in &outcomes {
+        eprintln!("{} ({:?}, {:.0} ms): {:?}", o.name, o.class, o.ms, o.result);
+        // An unreadable texture or image is a warning: the material colour stands in.
+        let must_refuse =
+            o.name != "chain" && !o.name.starts_with("image:") && !o.name.starts_with("texture:");
+        match &o.result {
+            Err(e) => bad.push(format!("{}: {e}", o.name)),
+            Ok(m) if must_refuse && m == "loaded" => bad.push(format!("{}: loaded", o.name)),
+            Ok(_) => {}
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(outcomes.len() >= 20);
+    assert!(bad.is_empty(), "{bad:?}");
+}

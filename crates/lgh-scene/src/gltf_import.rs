@@ -44,6 +44,15 @@ pub(crate) fn import(path: &Path) -> Result<Import, SceneError> {
         SceneError::new(path, message)
     })?;
     drop(bytes);
+    let triangles = instanced_triangles(&document);
+    if triangles > MAX_TRIANGLES {
+        return Err(SceneError::new(
+            path,
+            format!(
+                "its node tree places {triangles} triangles, more than the {MAX_TRIANGLES} lgh takes"
+            ),
+        ));
+    }
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut buffers = Vec::new();
     for b in document.buffers() {
@@ -69,15 +78,6 @@ pub(crate) fn import(path: &Path) -> Result<Import, SceneError> {
             data.push(0);
         }
         buffers.push(Data(data));
-    }
-    let triangles = instanced_triangles(&document);
-    if triangles > MAX_TRIANGLES {
-        return Err(SceneError::new(
-            path,
-            format!(
-                "its node tree places {triangles} triangles, more than the {MAX_TRIANGLES} lgh takes"
-            ),
-        ));
     }
     let mut budget = TexelBudget::default();
     let mut textures = Vec::new();

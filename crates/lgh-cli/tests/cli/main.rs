@@ -1,8 +1,10 @@
 //! The command line as a user meets it: successful renders and every kind of bad input.
 
 mod accel;
+mod bombs;
 mod gpu;
 mod hardening;
+mod outputs;
 mod view;
 
 use std::path::{Path, PathBuf};

@@ -145,10 +145,29 @@ impl Image {
     /// undone, tone mapping is not) image.
     ///
     /// # Errors
-    /// Missing or unreadable file, unsupported extension.
+    /// Missing or unreadable file, unsupported extension, more than [`MAX_LOAD_PIXELS`]
+    /// pixels, or a pixel that is not finite (our outputs never hold one).
     pub fn load(path: &Path) -> Result<Self, ImageError> {
-        if !path.is_file() {
-            return Err(ImageError::new(path, "file not found"));
+        let img = Self::load_any(path)?;
+        let bad = img.pixels.iter().filter(|p| !p.is_finite()).count();
+        if bad > 0 {
+            return Err(ImageError::new(
+                path,
+                format!(
+                    "{bad} of its {} pixels are not finite (NaN or infinite): no metric of it means anything",
+                    img.pixels.len()
+                ),
+            ));
+        }
+        Ok(img)
+    }
+
+    /// [`Image::load`] before the check of its values.
+    fn load_any(path: &Path) -> Result<Self, ImageError> {
+        match std::fs::metadata(path) {
+            Ok(m) if m.is_file() => {}
+            Ok(_) => return Err(ImageError::new(path, "not a regular file")),
+            Err(_) => return Err(ImageError::new(path, "file not found")),
         }
         match ImageFormat::from_path(path)? {
             ImageFormat::Exr => {
@@ -158,13 +177,21 @@ impl Image {
                     |res, _| Image::new(res.width() as u32, res.height() as u32),
                     |img: &mut Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
                         let w = img.width as usize;
-                        img.pixels[pos.y() * w + pos.x()] = finite_or_zero(Vec3::new(r, g, b));
+                        img.pixels[pos.y() * w + pos.x()] = Vec3::new(r, g, b);
                     },
                 )
                 .map_err(|e| ImageError::new(path, format!("cannot read EXR: {e}")))?;
                 Ok(img.layer_data.channel_data.pixels)
             }
             ImageFormat::Png => {
+                let too_big = |e: String| ImageError::new(path, format!("cannot read PNG: {e}"));
+                let (w, h) = image::image_dimensions(path).map_err(|e| too_big(e.to_string()))?;
+                if u64::from(w) * u64::from(h) > MAX_LOAD_PIXELS {
+                    return Err(ImageError::new(
+                        path,
+                        format!("PNG of {w}x{h} pixels: at most {MAX_LOAD_PIXELS} pixels"),
+                    ));
+                }
                 let img = image::open(path)
                     .map_err(|e| ImageError::new(path, format!("cannot read PNG: {e}")))?
                     .to_rgb32f();
@@ -184,21 +211,28 @@ impl Image {
     }
 }
 
+/// The most pixels an image read from a file may have: 16M (4096 x 4096; 5K, not 8K UHD),
+/// so that `lgh diff` of two of them, FLIP's working planes included (about 110 bytes a
+/// pixel, 1.8 GB measured at 4000 x 4000), stays under 2 GB. The size is checked from the
+/// header, before any pixel is decoded.
+pub const MAX_LOAD_PIXELS: u64 = 1 << 24;
+
 /// Reads an EXR file's headers and refuses sizes that no real file of its length has, before
 /// the `exr` crate allocates for them (it trusts the header: a hostile resolution aborts the
-/// process on allocation): more pixels than [`MAX_PIXELS`], or more chunks than the file has
+/// process on allocation): more pixels than [`MAX_LOAD_PIXELS`], or more chunks than the file has
 /// room for in its offset table (8 bytes each).
 fn check_exr_header(path: &Path) -> Result<(), ImageError> {
+    const _: () = assert!(MAX_LOAD_PIXELS <= MAX_PIXELS);
     let len = std::fs::metadata(path).map_or(0, |m| m.len());
     let meta = exr::meta::MetaData::read_from_file(path, false)
         .map_err(|e| ImageError::new(path, format!("cannot read EXR: {e}")))?;
     for h in &meta.headers {
         let pixels = (h.layer_size.0 as u64).saturating_mul(h.layer_size.1 as u64);
-        if pixels > MAX_PIXELS {
+        if pixels > MAX_LOAD_PIXELS {
             return Err(ImageError::new(
                 path,
                 format!(
-                    "EXR layer of {}x{} pixels: at most {MAX_PIXELS} pixels",
+                    "EXR layer of {}x{} pixels: at most {MAX_LOAD_PIXELS} pixels",
                     h.layer_size.0, h.layer_size.1
                 ),
             ));

@@ -9,11 +9,14 @@ use glam::Vec3;
 use lgh_core::color::finite_or_zero;
 use rayon::prelude::*;
 
-/// The ACES filmic curve (Narkowicz 2015 fit) for one channel; result in [0, 1].
+/// The ACES filmic curve (Narkowicz 2015 fit) for one channel; result in [0, 1]. It
+/// saturates: the input is clamped to [0, 10^4] (where the curve is already 1), so that
+/// `x * x` cannot overflow to inf / inf = NaN (radiance above 1.8e19 turned black).
 #[inline]
 #[must_use]
 pub fn aces(x: f32) -> f32 {
-    let x = x.max(0.0);
+    // NaN to 0 (`clamp` would keep it).
+    let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1e4) };
     ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
 }
 
@@ -62,6 +65,11 @@ mod tests {
         assert_eq!(
             tonemap_to_srgb8(&[Vec3::new(f32::NAN, -1.0, 1e9)], 1.0),
             vec![0, 0, 255]
+        );
+        // Radiance past 1.8e19 (x * x overflows) and products that overflow stay white.
+        assert_eq!(
+            tonemap_to_srgb8(&[Vec3::new(2e19, f32::MAX, 1e30)], 4.0),
+            vec![255, 255, 255]
         );
     }
 }

@@ -186,6 +186,13 @@ pub fn padded_boxes(mesh: &Mesh) -> Vec<Aabb> {
         .collect()
 }
 
+/// `dir` with every -0.0 made +0.0 (adding +0.0 does it): obvhs's traversal missed the
+/// hit of a ray along (-0, -0, -1) on a triangle that (+0, +0, -1) hits.
+#[inline]
+fn positive_zeros(dir: Vec3) -> Vec3 {
+    dir + Vec3::ZERO
+}
+
 impl Obvhs {
     fn build(mesh: &Mesh) -> Self {
         let boxes = padded_boxes(mesh);
@@ -207,7 +214,7 @@ impl Obvhs {
 
     #[inline]
     fn intersect(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
+        let ray = Ray::new(origin.into(), positive_zeros(dir).into(), 0.0, t_max);
         let mut hit = obvhs::ray::RayHit::none();
         if self
             .bvh
@@ -227,7 +234,7 @@ impl Obvhs {
 
     #[inline]
     fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, t_max);
+        let ray = Ray::new(origin.into(), positive_zeros(dir).into(), 0.0, t_max);
         !self
             .bvh
             .ray_traverse_miss(ray, |r, id| self.tris[id].intersect(r))

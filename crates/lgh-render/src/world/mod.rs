@@ -139,7 +139,7 @@ impl World {
                 .mesh
                 .positions
                 .iter()
-                .find(|p| !(p.abs().max_element() <= limit))
+                .find(|p| !p.is_finite() || p.abs().max_element() > limit)
             {
                 return Err(crate::RenderError::Animation {
                     time: t,

@@ -145,3 +145,56 @@ fn punctual_lights_are_untouched_by_the_estimator() {
     assert_eq!(a.direct, s.direct);
     assert!(a.direct.pixels.iter().any(|p| p.x > 0.0));
 }
+
+/// Past `EXACT_PUNCTUAL` lights, each pixel samples `PUNCTUAL_SAMPLES` of them by power: the
+/// mean over many stratification offsets equals the exact sum (the sum of the scene's lights
+/// one at a time), within 1% (fixed lights and points; the estimate's relative standard
+/// error over 2000 offsets is below 0.3% here).
+#[test]
+fn many_punctual_lights_are_sampled_without_bias() {
+    use lgh_render::direct::{EXACT_PUNCTUAL, punctual_irradiance};
+    let mut scene = common::floor_scene(2.0, Vec3::splat(0.6));
+    let n = 3 * EXACT_PUNCTUAL;
+    let mut rng = lgh_core::rng::Rng::new(&[7]);
+    let mut lights = Vec::new();
+    for i in 0..n {
+        let p = Vec3::new(
+            rng.next_f32() * 4.0 - 2.0,
+            0.5 + rng.next_f32(),
+            rng.next_f32() * 4.0 - 2.0,
+        );
+        let power = 0.2 + 3.0 * rng.next_f32() * (i % 3) as f32;
+        lights.push(lgh_scene::Light::Point {
+            position: p,
+            intensity: Vec3::new(power, 0.5 * power, 0.2),
+        });
+    }
+    scene.lights = lights.clone();
+    scene.finish(Path::new("<test>")).unwrap();
+    let world = World::new(scene.clone());
+    let (n_, ng) = (Vec3::Y, Vec3::Y);
+    for p in [
+        Vec3::ZERO,
+        Vec3::new(1.2, 0.0, -0.7),
+        Vec3::new(-1.5, 0.0, 1.5),
+    ] {
+        let exact: Vec3 = lights
+            .iter()
+            .map(|l| {
+                let mut one = scene.clone();
+                one.lights = vec![l.clone()];
+                punctual_irradiance(&World::new(one), p, n_, ng, 0.5)
+            })
+            .sum();
+        let m = 2000;
+        let mean: Vec3 = (0..m)
+            .map(|k| punctual_irradiance(&world, p, n_, ng, (k as f32 + 0.5) / m as f32))
+            .sum::<Vec3>()
+            / m as f32;
+        let rel = ((mean - exact).abs() / exact).max_element();
+        assert!(
+            rel < 0.01,
+            "at {p}: mean {mean} against exact {exact} ({rel})"
+        );
+    }
+}
