@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Result, anyhow, bail};
 use plotters::prelude::*;
 
 use crate::bench_quality::Point;
@@ -83,16 +83,7 @@ pub fn check_plot_path(path: &Path) -> Result<()> {
     {
         bail!("{}: the plot is a PNG (.png)", path.display());
     }
-    if let Some(dir) = path.parent()
-        && !dir.as_os_str().is_empty()
-        && !dir.is_dir()
-    {
-        bail!(
-            "{}: folder {} does not exist",
-            path.display(),
-            dir.display()
-        );
-    }
+    lgh_render::output::check_output(path)?;
     Ok(())
 }
 
@@ -211,9 +202,7 @@ pub fn plot(path: &Path, scenes: &[String], points: &[Point]) -> Result<()> {
         }
         root.present().map_err(|e| anyhow!("plot: {e}"))?;
     }
-    let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| anyhow!("plot buffer"))?;
-    img.save(path)
-        .with_context(|| format!("{}: cannot write the plot", path.display()))?;
+    lgh_render::image::save_png(path, w, h, &buf)?;
     if !text {
         eprintln!(
             "note: no font found for the plot's labels (install fonts-dejavu-core or set LGH_FONT)"
