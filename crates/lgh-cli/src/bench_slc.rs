@@ -87,6 +87,15 @@ fn row(
 }
 
 pub fn run(args: &SlcBenchArgs) -> Result<()> {
+    for (flag, v) in [
+        ("--error-bound", f64::from(args.error_bound)),
+        ("--pt-error-bound", f64::from(args.pt_error_bound)),
+        ("--pt-budget-ms", args.pt_budget_ms),
+    ] {
+        if !v.is_finite() || v <= 0.0 {
+            anyhow::bail!("{flag} {v}: must be a positive number");
+        }
+    }
     let threads = args.options.threads()?;
     let (name, world) = crate::bench_cmd::open_scene(args.scene.as_deref(), &args.options)?;
     let base = RenderSettings {

@@ -81,6 +81,7 @@ pub fn run(args: &TemporalBenchArgs) -> Result<()> {
         target,
         ..TemporalSettings::default()
     };
+    taa(TemporalTarget::ShadowRatio).validate()?;
     let (without, ms) = run_one(&world, &base, args.frames, None)?;
     // The flicker of the unshadowed lighting A alone: the part no shadow filter can remove.
     let mut no_shadows = base.clone();

@@ -150,7 +150,8 @@ pub struct RenderSettings {
     /// Number of virtual point lights (VPLs) to generate by light tracing.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().vpls))]
     pub vpls: usize,
-    /// Maximum VPLs per light path, i.e. indirect bounces represented (1 = one bounce).
+    /// Maximum VPLs per light path, i.e. indirect bounces represented (1 = one bounce; at
+    /// most 64).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().bounces))]
     pub bounces: u32,
     /// Numbers that drive the light paths (both unbiased; `sobol` is stratified).
@@ -240,6 +241,10 @@ pub struct SettingsError {
 
 /// Most VPLs a frame: 2^24 (about 4 GB with their hierarchy).
 pub const MAX_VPLS: usize = 1 << 24;
+
+/// The most VPLs per light path (`--bounces`): 64, where a path's throughput has long
+/// vanished in any scene whose albedos are below one.
+pub const MAX_BOUNCES: u32 = 64;
 
 /// The most area-light samples per pixel (`--area-samples`): 1024, far past where the
 /// analytic estimator's filtered ratio stops improving.
@@ -414,6 +419,7 @@ impl RenderSettings {
         }
         in_range("spp", self.pt.spp, 1, 1 << 20)?;
         in_range("area-samples", self.area_samples, 0, MAX_AREA_SAMPLES)?;
+        in_range("bounces", self.bounces, 0, MAX_BOUNCES)?;
         if let Some(n) = self.tiling.interleave {
             in_range("interleave", n, 1, 16)?;
         }

@@ -281,6 +281,18 @@ fn every_count_flag_has_a_stated_cap() {
         &lgh(&["render", "--area-samples", "100000"]),
         &["--area-samples 100000", "1024"],
     );
+    assert_error(
+        &lgh(&["render", "--bounces", "4000000000"]),
+        &["--bounces 4000000000", "64"],
+    );
+    // The numbers of the benchmarks too.
+    for args in [
+        &["bench", "slc", "--error-bound=nan"][..],
+        &["bench", "slc", "--pt-budget-ms=-1"],
+        &["bench", "temporal", "--taa-alpha=inf"],
+    ] {
+        assert_error(&lgh(args), &[args[2].split('=').next().unwrap_or_default()]);
+    }
 }
 
 #[test]
