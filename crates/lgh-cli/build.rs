@@ -1,6 +1,8 @@
 //! Marks the build with `cfg(assimp_models)` when Debian's assimp-testmodels are installed
 //! and `cfg(xvfb)` when Debian's xvfb is (`.ci/run` installs both), so that the tests that
 //! need them are `#[ignore]`d, shown as ignored rather than passed, in a build without them.
+//! Likewise `cfg(openjd)` when PyPI's openjd-cli is found (the `LGH_OPENJD` variable naming
+//! its `openjd`, or `openjd` on the PATH), whose path the farm test gets as `LGH_OPENJD_BIN`.
 
 const MODELS: &str = "/usr/share/assimp/models";
 const XVFB_RUN: &str = "/usr/bin/xvfb-run";
@@ -11,6 +13,19 @@ fn main() {
     println!("cargo::rerun-if-changed={XVFB_RUN}");
     if std::path::Path::new(XVFB_RUN).is_file() {
         println!("cargo::rustc-cfg=xvfb");
+    }
+    println!("cargo::rustc-check-cfg=cfg(openjd)");
+    println!("cargo::rerun-if-env-changed=LGH_OPENJD");
+    println!("cargo::rerun-if-env-changed=PATH");
+    let named = std::env::var_os("LGH_OPENJD").map(std::path::PathBuf::from);
+    let on_path = || {
+        std::env::split_paths(&std::env::var_os("PATH")?)
+            .map(|d| d.join("openjd"))
+            .find(|p| p.is_file())
+    };
+    if let Some(bin) = named.filter(|p| p.is_file()).or_else(on_path) {
+        println!("cargo::rustc-cfg=openjd");
+        println!("cargo::rustc-env=LGH_OPENJD_BIN={}", bin.display());
     }
     println!("cargo::rerun-if-changed={MODELS}");
     if std::path::Path::new(MODELS).is_dir() {

@@ -17,6 +17,7 @@ mod bench_temporal;
 mod caps;
 mod diff_cmd;
 mod heatmap;
+mod merge_cmd;
 mod progress_bar;
 mod render_cmd;
 mod scene_arg;
@@ -59,6 +60,9 @@ enum Command {
     /// Measure performance.
     #[command(allow_negative_numbers = true)]
     Bench(bench_cmd::BenchArgs),
+    /// Join the pieces of a frame rendered with `lgh render --tile I/N` (render farms):
+    /// they must belong to one frame, share its settings and cover it once.
+    Merge(merge_cmd::MergeArgs),
 }
 
 /// The last line of defence: a panic (a bug, since no input should cause one) prints one line
@@ -105,6 +109,7 @@ fn main() -> ExitCode {
             view(*a)
         }
         Command::Diff(a) => diff_cmd::run(&a),
+        Command::Merge(a) => merge_cmd::run(&a),
         Command::Bench(a) => bench_cmd::run(&a),
     };
     match result {

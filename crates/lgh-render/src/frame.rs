@@ -132,6 +132,9 @@ pub fn render_frame_with(
         if !g.shows(world, &camera, w, h) {
             g.render_into(world, &camera, w, h);
         }
+        if let Some(r) = &s.region {
+            g.clear_outside(&r.grown(crate::region::guard_band(s), w, h));
+        }
         g
     });
     let all_reflected = s.method.illumination() == Illumination::AllReflected;

@@ -20,6 +20,7 @@
 //! | [`budget`] | the memory a render needs, estimated before it allocates |
 //! | [`image`] | EXR/PNG files, tone mapping, image metrics |
 //! | [`output`] | output files written whole, never over a device or folder, cleaned up on Ctrl-C |
+//! | [`region`] | one rectangle of a frame, equal to the whole frame's pixels (render farms) |
 //! | [`progress`], [`raybench`] | progress reporting; ray throughput |
 //!
 //! Every pass is parallel (rayon) and deterministic: the same seed gives the same image
@@ -66,6 +67,7 @@ pub mod output;
 pub mod passes;
 pub mod progress;
 pub mod raybench;
+pub mod region;
 pub mod sequence;
 pub mod settings;
 pub mod shading;

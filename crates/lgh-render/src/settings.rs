@@ -115,8 +115,8 @@ pub struct Tiling {
     pub interleave: Option<u32>,
     /// lgh, slc: screen tile edge in sub-image pixels for light binning. Default: 16
     /// full-resolution pixels for lgh (16 / n sub-image pixels with n x n interleaving, at least
-    /// 4), 16 sub-image pixels for slc.
-    #[cfg_attr(feature = "clap", arg(long))]
+    /// 4), 16 sub-image pixels for slc. (`--tile` renders one piece of the frame.)
+    #[cfg_attr(feature = "clap", arg(long = "tile-size"))]
     pub tile: Option<u32>,
     /// The discontinuity-aware blur that recombines interleaved sub-images.
     #[cfg_attr(feature = "clap", arg(skip = BlurParams::defaults()))]
@@ -147,6 +147,11 @@ pub struct RenderSettings {
     /// How the indirect light is computed (`brute` is the exact reference, slow).
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = RenderSettings::default().method))]
     pub method: Method,
+    /// Render only this rectangle of the frame (and the guard band its filters need): its
+    /// pixels equal the whole frame's ([`crate::region`]); `None` renders the whole frame.
+    #[cfg_attr(feature = "clap", arg(skip))]
+    #[serde(skip)]
+    pub region: Option<crate::region::Region>,
     /// Number of virtual point lights (VPLs) to generate by light tracing.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().vpls))]
     pub vpls: usize,
@@ -206,6 +211,7 @@ impl Default for RenderSettings {
         Self {
             width: 640,
             height: 360,
+            region: None,
             method: lgh::LGH,
             vpls: 10_000,
             bounces: 3,
@@ -401,6 +407,15 @@ impl RenderSettings {
         if let Some(e) = self.error_bound {
             positive("error-bound", e)?;
         }
+        if let Some(r) = &self.region
+            && let Err(e) = r.check(self.width, self.height)
+        {
+            return err(
+                "region",
+                &format!("{},{},{},{}", r.x0, r.y0, r.x1, r.y1),
+                &e,
+            );
+        }
         if self.vpls > MAX_VPLS {
             return err(
                 "vpls",
@@ -424,7 +439,7 @@ impl RenderSettings {
             in_range("interleave", n, 1, 16)?;
         }
         if let Some(t) = self.tiling.tile {
-            in_range("tile", t, 1, 256)?;
+            in_range("tile-size", t, 1, 256)?;
         }
         in_range("start-level", self.lgh.start_level, 0, 1)?;
         if let Some(l) = self.lgh.only_level {

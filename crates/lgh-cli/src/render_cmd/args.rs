@@ -62,6 +62,20 @@ pub struct RenderArgs {
     /// random numbers are new in every frame (seed + frame number).
     #[arg(long, value_parser = parse_frames)]
     pub frames: Option<(u32, u32)>,
+    /// With --taa: render this many frames before A, unwritten, as the temporal filter's
+    /// history, so that a chunk of a sequence starting at A matches one long run (a farm
+    /// renders a sequence in chunks).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=1000))]
+    pub warmup: u32,
+    /// Render only tile I of N (I from 1 to N; the frame cut into a grid of about square
+    /// tiles: 4 = 2 x 2, 9 = 3 x 3, 6 = 2 x 3) for a render farm. The piece goes to --out,
+    /// which must be an .exr, with a side file OUT.json saying where it lies; `lgh merge`
+    /// joins the pieces, which equal the whole frame bit for bit.
+    #[arg(long = "tile", value_parser = parse_tile, conflicts_with = "region")]
+    pub piece: Option<(u32, u32)>,
+    /// Render only the pixels x0..x1 by y0..y1 (half-open) of the frame, as --tile does.
+    #[arg(long, value_parser = lgh_render::region::Region::parse)]
+    pub region: Option<lgh_render::region::Region>,
     /// Frames per second of the sequence (frame f shows time f / fps).
     #[arg(long, default_value_t = 24.0)]
     pub fps: f32,
@@ -84,14 +98,27 @@ pub struct RenderArgs {
 }
 
 impl RenderArgs {
-    /// The rendering settings with the image size of `--size`.
-    #[must_use]
-    pub fn render_settings(&self) -> RenderSettings {
-        RenderSettings {
-            width: self.size.0,
-            height: self.size.1,
+    /// The rendering settings with the image size of `--size` and the piece of `--tile` or
+    /// `--region`.
+    ///
+    /// # Errors
+    /// A tile or region that does not fit the frame.
+    pub fn render_settings(&self) -> Result<RenderSettings, String> {
+        let (width, height) = self.size;
+        let region = match (self.piece, self.region) {
+            (Some((i, n)), _) => Some(lgh_render::region::Region::tile(i, n, width, height)?),
+            (None, Some(r)) => {
+                r.check(width, height)?;
+                Some(r)
+            }
+            (None, None) => None,
+        };
+        Ok(RenderSettings {
+            width,
+            height,
+            region,
             ..self.settings.clone()
-        }
+        })
     }
 
     /// With `--accumulate N` (N > 1), frames take
@@ -107,6 +134,17 @@ impl RenderArgs {
 
 /// The longest sequence `--frames` takes.
 pub const MAX_FRAMES: u32 = 1_000_000;
+
+/// Parses `I/N` (tile I of N).
+pub fn parse_tile(s: &str) -> Result<(u32, u32), String> {
+    let parse = |(i, n): (&str, &str)| Some((i.trim().parse().ok()?, n.trim().parse().ok()?));
+    match s.split_once('/').and_then(parse) {
+        Some((i, n)) if (1..=n).contains(&i) && n <= 65_536 => Ok((i, n)),
+        _ => Err(format!(
+            "'{s}': expected I/N with 1 <= I <= N <= 65536 (e.g. 3/4)"
+        )),
+    }
+}
 
 /// Parses `A..B` (frames A to B - 1).
 pub fn parse_frames(s: &str) -> Result<(u32, u32), String> {

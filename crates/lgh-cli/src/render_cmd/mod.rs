@@ -1,6 +1,7 @@
 //! `lgh render`: one frame, or a sequence of frames, to image files.
 
 mod args;
+pub mod piece;
 mod stats;
 
 use std::time::Instant;
@@ -45,7 +46,23 @@ fn check_args(args: &RenderArgs) -> Result<()> {
         args.out.clone()
     };
     check_output_path(&out)?;
+    let piece = args.piece.is_some() || args.region.is_some();
+    let side = piece::side_path(&out);
+    if piece {
+        if lgh_render::image::ImageFormat::from_path(&out)? != lgh_render::image::ImageFormat::Exr {
+            bail!(
+                "{}: a piece of a frame (--tile, --region) is written as .exr (linear, for lgh merge)",
+                out.display()
+            );
+        }
+        if args.heatmap.is_some() {
+            bail!("--heatmap and --tile/--region cannot be combined");
+        }
+    }
     let mut outputs = vec![("-o", out.as_path())];
+    if piece {
+        outputs.push(("the piece's side file", side.as_path()));
+    }
     if let Some(h) = &args.heatmap {
         check_output_path(h)?;
         outputs.push(("--heatmap", h));
@@ -55,6 +72,31 @@ fn check_args(args: &RenderArgs) -> Result<()> {
     }
     lgh_render::output::check_outputs(&outputs)?;
     Ok(())
+}
+
+/// Writes a frame: the whole image, or the piece of `s.region` with its side file.
+fn save(
+    args: &RenderArgs,
+    image: &lgh_render::Image,
+    path: &std::path::Path,
+    s: &RenderSettings,
+    exposure: f32,
+    frame: Option<u32>,
+) -> Result<()> {
+    if s.region.is_some() {
+        let scene = args.scene.as_ref().map_or_else(
+            || "builtin:cornell".into(),
+            |p| p.to_string_lossy().into_owned(),
+        );
+        // The seed of a sequence's frame is the base seed plus the frame number: the side
+        // file records the base, so that every frame's pieces agree.
+        let mut base = s.clone();
+        base.seed = args.settings.seed;
+        base.slc.frame_seed = 0;
+        piece::write(path, image, &base, &scene, exposure, frame)
+    } else {
+        Ok(image.save(path, exposure)?)
+    }
 }
 
 /// `--frames`: renders the sequence, one image per frame.
@@ -68,12 +110,18 @@ fn run_sequence(
 ) -> Result<()> {
     let mut seq = Sequence::new(args.taa.then_some(args.temporal));
     let mut per_frame = Vec::new();
-    for f in first..end {
+    // The temporal filter's history: frames before `first`, rendered and not written.
+    let warm = if args.taa {
+        first.saturating_sub(args.warmup)
+    } else {
+        first
+    };
+    for f in warm..end {
         world
             .check_time(f as f32 / args.fps)
             .map_err(|e| anyhow::anyhow!("frame {f}: {e}"))?;
     }
-    for f in first..end {
+    for f in warm..end {
         let update = Instant::now();
         world.set_time(f as f32 / args.fps)?;
         let update_ms = update.elapsed().as_secs_f64() * 1e3;
@@ -81,8 +129,12 @@ fn run_sequence(
         s.seed = settings.seed.wrapping_add(u64::from(f));
         s.slc.frame_seed = f;
         let frame = seq.render(&world, &s, bars)?;
+        if f < first {
+            seq.recycle(frame);
+            continue;
+        }
         let path = frame_path(&args.out, f);
-        frame.image.save(&path, exposure)?;
+        save(args, &frame.image, &path, &s, exposure, Some(f))?;
         let ms = frame.timings.get("total").unwrap_or(0.0);
         per_frame
             .push(serde_json::json!({"frame": f, "total_ms": ms, "scene_update_ms": update_ms}));
@@ -110,7 +162,7 @@ fn run_sequence(
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     check_args(args)?;
-    let mut settings = args.render_settings();
+    let mut settings = args.render_settings().map_err(anyhow::Error::msg)?;
     settings.validate()?;
     let mut device = "cpu".to_owned();
     if args.device == args::Device::Gpu {
@@ -153,7 +205,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     } else {
         render_frame(&world, &settings, &bars)?
     };
-    frame.image.save(&args.out, exposure)?;
+    save(args, &frame.image, &args.out, &settings, exposure, None)?;
     if let (Some(path), Some(counts)) = (&args.heatmap, &frame.method.lights_per_pixel) {
         let max = crate::heatmap::write(path, settings.width, settings.height, counts)?;
         if !args.quiet {

@@ -2,6 +2,7 @@
 
 mod accel;
 mod bombs;
+mod farm;
 mod gpu;
 mod hardening;
 mod outputs;

@@ -111,6 +111,24 @@ impl GBuffer {
         self.depth.len()
     }
 
+    /// Clears every pixel outside `keep` to "sees nothing", so that no pass shades it (a
+    /// piece of a frame, [`crate::region`]); the planes no longer show a whole view.
+    pub fn clear_outside(&mut self, keep: &crate::region::Region) {
+        let w = self.width as usize;
+        for i in 0..self.len() {
+            let (x, y) = ((i % w) as u32, (i / w) as u32);
+            if !keep.contains(x, y) {
+                self.position[i] = Vec3::ZERO;
+                self.normal[i] = Vec3::ZERO;
+                self.geo_normal[i] = Vec3::ZERO;
+                self.albedo[i] = Vec3::ZERO;
+                self.depth[i] = f32::INFINITY;
+                self.emission[i] = Vec3::ZERO;
+            }
+        }
+        self.view = None;
+    }
+
     /// True for a zero-size buffer.
     #[must_use]
     pub fn is_empty(&self) -> bool {

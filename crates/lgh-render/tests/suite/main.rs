@@ -14,6 +14,7 @@ mod hostile;
 mod ism;
 mod lgh_method;
 mod pt_method;
+mod region;
 mod sequence;
 mod shared_scenes;
 mod slc_method;
