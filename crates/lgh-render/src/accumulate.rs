@@ -6,7 +6,7 @@
 //! 1/N of its flux), so `lgh` and `brute` accumulated over the same N are comparable, and
 //! both converge to the solution of the light transport as N grows.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use lgh_core::rng::hash;
 
 use crate::frame::{Frame, render_frame_with};
@@ -38,14 +38,29 @@ pub fn frame_seed(seed: u64, k: u32) -> u64 {
 }
 
 /// The settings of frame `k` of `frames`: its own seed (VPLs, shadow samples, direct-light
-/// samples), SLC range seed, and for more than one frame a random grid offset for `lgh`.
+/// samples), SLC range seed, and for more than one frame a random grid offset for `lgh` and
+/// its own sub-pixel position ([`subpixel_jitter`]), so that the mean is anti-aliased.
 #[must_use]
 pub fn frame_settings(s: &RenderSettings, k: u32, frames: u32) -> RenderSettings {
     let mut f = s.clone();
     f.seed = frame_seed(s.seed, k);
     f.slc.frame_seed = s.slc.frame_seed.wrapping_add(k);
     f.lgh.grid_jitter |= frames > 1;
+    if frames > 1 {
+        f.jitter = subpixel_jitter(k);
+    }
     f
+}
+
+/// The sub-pixel offset of frame `k` of an accumulation, in [-0.5, 0.5)^2: zero for the
+/// first frame (one frame is the plain render), then Roberts' R2 sequence (the plastic
+/// constant's additive recurrence), whose first N points cover the pixel evenly for every N,
+/// so that an accumulation of any length box-filters the pixel.
+#[must_use]
+pub fn subpixel_jitter(k: u32) -> Vec2 {
+    const A: [f64; 2] = [0.754_877_666_246_692_8, 0.569_840_290_998_053_2];
+    let f = |a: f64| ((0.5 + a * f64::from(k)).fract() - 0.5) as f32;
+    Vec2::new(f(A[0]), f(A[1]))
 }
 
 /// The settings of frame `k` of an accumulation of `frames` frames: [`frame_settings`], and

@@ -126,7 +126,7 @@ pub fn render_frame_with(
     let start = Instant::now();
     let mut t = Timings::default();
     let (w, h) = (s.width, s.height);
-    let camera = world.scene.camera().frame(w, h);
+    let camera = world.scene.camera().frame(w, h).with_jitter(s.jitter);
     let g = t.time("gbuffer", || {
         let mut g = memory.gbuffer.take().unwrap_or_default();
         if !g.shows(world, &camera, w, h) {

@@ -152,6 +152,12 @@ pub struct RenderSettings {
     #[cfg_attr(feature = "clap", arg(skip))]
     #[serde(skip)]
     pub region: Option<crate::region::Region>,
+    /// Offset of every pixel's primary ray from the pixel centre, in pixels (each component
+    /// in [-0.5, 0.5)); zero for a single frame, set per frame by an accumulation so that
+    /// the mean is anti-aliased ([`crate::accumulate::subpixel_jitter`]).
+    #[cfg_attr(feature = "clap", arg(skip))]
+    #[serde(skip)]
+    pub jitter: glam::Vec2,
     /// Number of virtual point lights (VPLs) to generate by light tracing.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().vpls))]
     pub vpls: usize,
@@ -212,6 +218,7 @@ impl Default for RenderSettings {
             width: 640,
             height: 360,
             region: None,
+            jitter: glam::Vec2::ZERO,
             method: lgh::LGH,
             vpls: 10_000,
             bounces: 3,

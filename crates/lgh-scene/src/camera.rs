@@ -27,6 +27,8 @@ pub struct CameraFrame {
     up: Vec3,
     scale: Vec2,
     size: Vec2,
+    /// Offset of every pixel's sample point from its centre, in pixels (zero: the centre).
+    jitter: Vec2,
 }
 
 impl Camera {
@@ -59,11 +61,29 @@ impl Camera {
             up,
             scale: Vec2::new(tan_y * aspect, tan_y),
             size: Vec2::new(width as f32, height as f32),
+            jitter: Vec2::ZERO,
         }
     }
 }
 
 impl CameraFrame {
+    /// The same camera with every pixel's sample point moved by `jitter` pixels from its
+    /// centre (each component in [-0.5, 0.5)): frames of an accumulation at different
+    /// offsets average to an anti-aliased image. [`CameraFrame::project`] and
+    /// [`CameraFrame::sphere_bounds`] answer in the pixel grid, so that a point projects to
+    /// the pixel whose (moved) sample point it is nearest.
+    #[must_use]
+    pub fn with_jitter(self, jitter: Vec2) -> Self {
+        Self { jitter, ..self }
+    }
+
+    /// The sample point of pixel (x, y): its centre moved by the jitter.
+    #[inline]
+    #[must_use]
+    pub fn sample_point(&self, x: u32, y: u32) -> Vec2 {
+        Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + self.jitter
+    }
+
     /// Unit direction through the image point `pixel` (in pixels, (0, 0) = top-left corner of
     /// the image, so a pixel centre is (x + 0.5, y + 0.5)).
     #[inline]
@@ -106,8 +126,8 @@ impl CameraFrame {
         };
         let (x_lo, x_hi) = slopes(cx);
         let (y_lo, y_hi) = slopes(cy);
-        let px = |m: f32| (m / self.scale.x + 1.0) * 0.5 * self.size.x;
-        let py = |m: f32| (1.0 - m / self.scale.y) * 0.5 * self.size.y;
+        let px = |m: f32| (m / self.scale.x + 1.0) * 0.5 * self.size.x - self.jitter.x;
+        let py = |m: f32| (1.0 - m / self.scale.y) * 0.5 * self.size.y - self.jitter.y;
         let rect = [px(x_lo), py(y_hi), px(x_hi), py(y_lo)];
         rect.iter().all(|v| v.is_finite()).then_some(rect)
     }
@@ -124,7 +144,7 @@ impl CameraFrame {
         let x = d.dot(self.right) / (z * self.scale.x);
         let y = d.dot(self.up) / (z * self.scale.y);
         Some((
-            Vec2::new((x + 1.0) * 0.5 * self.size.x, (1.0 - y) * 0.5 * self.size.y),
+            Vec2::new((x + 1.0) * 0.5 * self.size.x, (1.0 - y) * 0.5 * self.size.y) - self.jitter,
             z,
         ))
     }
@@ -152,6 +172,11 @@ mod tests {
         // +x is to the right when looking down -z with +y up.
         let (r, _) = f.project(Vec3::new(2.0, 2.0, 0.0)).unwrap();
         assert!(r.x > 100.0);
+        // A jittered frame projects a pixel's sample point back to that pixel's centre.
+        let j = f.with_jitter(Vec2::new(0.3, -0.4));
+        let p = j.origin + j.direction(j.sample_point(37, 81)) * 5.0;
+        let (q, _) = j.project(p).unwrap();
+        assert!((q - Vec2::new(37.5, 81.5)).length() < 1e-3, "{q}");
     }
 
     /// A point of `Vec3` with coordinates in [-s/2, s/2).

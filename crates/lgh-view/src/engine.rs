@@ -111,7 +111,14 @@ impl FrameLoop {
             self.accumulated = 0;
         }
         // Every frame its own seeds and, for lgh, its own grid offset.
-        let settings = frame_settings(&state.settings, self.frame as u32, 2);
+        let mut settings = frame_settings(&state.settings, self.frame as u32, 2);
+        // Still frames accumulate at their own sub-pixel positions (an anti-aliased image);
+        // moving frames sample pixel centres, so that nothing shimmers.
+        settings.jitter = if still {
+            lgh_render::accumulate::subpixel_jitter(self.accumulated)
+        } else {
+            glam::Vec2::ZERO
+        };
         self.frame += 1;
         let mut frame = if still || !state.taa {
             render_frame_with(&self.world, &settings, &Silent, &mut self.memory)?

@@ -51,8 +51,9 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = Device::Cpu)]
     pub device: Device,
     /// Render N frames of the (static) view with independent VPL sets (seeds derived from
-    /// --seed; for lgh also a random grid offset each) and write their mean: a progressive
-    /// render that converges as N grows. For brute it is the brute force over the union of
+    /// --seed; for lgh also a random grid offset each), each sampling its pixels at its own
+    /// sub-pixel offset, and write their mean: a progressive render that converges, edges
+    /// anti-aliased, as N grows. For brute it is the brute force over the union of
     /// the N VPL sets, so the two are comparable. Without --shadow-samples, frames take 16
     /// shadow samples (the shadow filter shrinks as N grows).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=65536))]

@@ -1,6 +1,7 @@
-//! The G-buffer: what the camera sees through each pixel centre (one primary ray per pixel).
+//! The G-buffer: what the camera sees through each pixel's sample point (one primary ray per
+//! pixel; the centre, or moved by the camera frame's jitter in an accumulation).
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::passes::par_filled;
@@ -83,7 +84,7 @@ impl GBuffer {
             .for_each(
                 |(y, (position, normal, geo_normal, albedo, depth, emission))| {
                     for x in 0..position.len() {
-                        let px = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                        let px = frame.sample_point(x as u32, y as u32);
                         let hit = world.trace(frame.origin, frame.direction(px));
                         let Some(s) = hit else {
                             position[x] = Vec3::ZERO;

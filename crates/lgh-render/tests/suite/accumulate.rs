@@ -21,7 +21,8 @@ fn accumulated(world: &World, method: lgh_render::Method, vpls: usize, n: u32) -
 }
 
 /// The brute force accumulated over N frames of 500 VPLs is the brute force over their
-/// union: its error against a 16,000-VPL brute force falls like 1 / sqrt(N) (VPL noise);
+/// union: its error against a 16,000-VPL brute force (accumulated over 16 frames, so
+/// anti-aliased like the means) falls like 1 / sqrt(N) (VPL noise and aliasing);
 /// asserted: N = 16 at most 0.4 of N = 1 (1 / sqrt(16) = 0.25, plus the reference's own
 /// noise). And `lgh` accumulated over N frames converges to the brute force accumulated over
 /// the same N (its estimate is unbiased, and the filters shrink as N grows): rel_rmse at
@@ -30,7 +31,9 @@ fn accumulated(world: &World, method: lgh_render::Method, vpls: usize, n: u32) -
 #[test]
 fn accumulation_converges() {
     let world = common::cornell_world();
-    let fine = accumulated(&world, BRUTE, 16_000, 1);
+    // 16,000 VPLs as 16 frames of 1000: the same sub-pixel offsets as the N = 16 means, so
+    // the reference is anti-aliased like them.
+    let fine = accumulated(&world, BRUTE, 1000, 16);
     let e = |n| {
         diff(&accumulated(&world, BRUTE, 500, n), &fine)
             .unwrap()
@@ -75,4 +78,48 @@ fn accumulation_is_deterministic() {
     let (a, b) = (pool(1).install(run), pool(2).install(run));
     assert_eq!(a.image, b.image);
     assert_ne!(a.image, plain.image);
+}
+
+/// Frames of an accumulation sample their pixels at Roberts' R2 offsets, so the mean is
+/// anti-aliased: the direct light of the Cornell box accumulated over 16 frames at 64x36 is
+/// closer to a 4 x 4 supersampled reference (the same view at 256x144, box-filtered) than
+/// one frame is: rel_rmse at most 0.5 of one frame's (the box edges alias in one frame).
+#[test]
+fn accumulation_is_anti_aliased() {
+    use lgh_render::Component;
+    let world = common::cornell_world();
+    let base = RenderSettings {
+        width: 64,
+        height: 36,
+        component: Component::Direct,
+        area_samples: 16,
+        ..RenderSettings::default()
+    };
+    let big = lgh_render::render_frame(
+        &world,
+        &RenderSettings {
+            width: 256,
+            height: 144,
+            ..base.clone()
+        },
+        &Silent,
+    )
+    .unwrap()
+    .image;
+    let mut pixels = vec![glam::Vec3::ZERO; 64 * 36];
+    for y in 0..144 {
+        for x in 0..256 {
+            pixels[(y / 4) * 64 + x / 4] += big.get(x as u32, y as u32) / 16.0;
+        }
+    }
+    let reference = Image::from_pixels(64, 36, pixels);
+    let mean = |n| {
+        render_accumulated(&world, &base, n, &Silent, &mut FrameMemory::default())
+            .unwrap()
+            .image
+    };
+    let one = diff(&mean(1), &reference).unwrap().rel_rmse;
+    let sixteen = diff(&mean(16), &reference).unwrap().rel_rmse;
+    assert!(sixteen < 0.5 * one, "16 frames {sixteen} against one {one}");
+    assert_eq!(lgh_render::accumulate::subpixel_jitter(0), glam::Vec2::ZERO);
 }
