@@ -53,13 +53,21 @@ fn target(path: &Path) -> Result<Target, OutputError> {
         Err(e) => return Err(OutputError::new(path, format!("cannot examine: {e}"))),
     };
     if meta.file_type().is_symlink() {
-        // The resolved path has no links left (a loop of links fails to resolve).
-        return match std::fs::canonicalize(path) {
-            Ok(real) => target(&real),
-            Err(_) => Err(OutputError::new(
+        // What the link names, as the kernel resolves it: /dev/stdout names a pipe or a
+        // terminal through /proc, which has no path to canonicalize, so a device or FIFO is
+        // written through the link itself; a regular file is replaced at its real path (the
+        // link stays a link).
+        let Ok(named) = std::fs::metadata(path) else {
+            return Err(OutputError::new(
                 path,
                 "a symbolic link to nothing (dangling): name the file itself",
-            )),
+            ));
+        };
+        return match kind(path, &named.file_type())? {
+            Target::Through(_) => Ok(Target::Through(path.to_path_buf())),
+            Target::Replace(_) => std::fs::canonicalize(path)
+                .map(Target::Replace)
+                .map_err(|e| OutputError::new(path, format!("cannot resolve the link: {e}"))),
         };
     }
     kind(path, &meta.file_type())

@@ -42,6 +42,11 @@ fn stats_never_replace_a_link_or_a_device() {
             .file_type()
             .is_char_device()
     );
+    // /dev/stdout into a pipe (a link, through /proc, to a pipe with no path): written
+    // through.
+    let r = render(&["-o", s(&o), "--stats", "/dev/stdout"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(String::from_utf8_lossy(&r.stdout).contains("\"scene\""));
     // A folder is refused by name, before the work.
     assert_error(&render(&["-o", s(&o), "--stats", s(&d)]), &["is a folder"]);
     let _ = std::fs::remove_dir_all(&d);
@@ -151,7 +156,7 @@ fn ctrl_c_stops_with_130_and_leaves_no_partial_file() {
         .args(["--quiet", "-o", s(&o)])
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(500));
+    std::thread::sleep(std::time::Duration::from_millis(1500));
     std::process::Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()
