@@ -22,6 +22,38 @@ fn diff(a: &Path, b: &Path) -> (f64, f64) {
     (v["max_abs"].as_f64().unwrap(), v["flip"].as_f64().unwrap())
 }
 
+/// The sequence both chunk tests render: 8 frames of a moving light, small.
+const SEQUENCE: [&str; 6] = [
+    "builtin:cornell-moving-light",
+    "--size",
+    "96x54",
+    "--vpls",
+    "1000",
+    "--quiet",
+];
+
+/// Renders [`SEQUENCE`]'s frames 0..8 in one run into `d` (named `name_F.exr`), and checks
+/// every frame `ours(F)` against it: bit for bit without TAA, within FLIP 0.01 with it.
+fn assert_matches_one_run(d: &Path, name: &str, taa: bool, ours: impl Fn(u32) -> PathBuf) {
+    let long = d.join(format!("{name}_#.exr"));
+    let t: &[&str] = if taa { &["--taa"] } else { &[] };
+    ok(&lgh(&[
+        &["render"][..],
+        &SEQUENCE,
+        t,
+        &["--frames", "0..8", "-o", s(&long)],
+    ]
+    .concat()));
+    for f in 0..8 {
+        let (max_abs, flip) = diff(&ours(f), &d.join(format!("{name}_{f}.exr")));
+        if taa {
+            assert!(flip <= 0.01, "frame {f}: FLIP {flip}");
+        } else {
+            assert_eq!(max_abs, 0.0, "frame {f}");
+        }
+    }
+}
+
 fn test_scene(name: &str) -> String {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../scenes/test")
@@ -152,47 +184,24 @@ fn bad_pieces_are_refused_by_name() {
 #[test]
 fn chunks_with_warm_up_match_one_long_run() {
     let d = temp_dir("farm-chunks");
-    let common = [
-        "render",
-        "builtin:cornell-moving-light",
-        "--size",
-        "96x54",
-        "--vpls",
-        "1000",
-        "--quiet",
-    ];
     for taa in [false, true] {
-        let t: &[&str] = if taa { &["--taa"] } else { &[] };
-        let long = d.join("long_#.exr");
-        ok(&lgh(&[
-            &common[..],
-            t,
-            &["--frames", "0..8", "-o", s(&long)],
-        ]
-        .concat()));
+        let t: &[&str] = if taa {
+            &["--taa", "--warmup", "4"]
+        } else {
+            &[]
+        };
         let chunk = d.join("chunk_#.exr");
         for start in [0, 2, 4, 6] {
             let frames = format!("{start}..{}", start + 2);
-            let w: &[&str] = if taa { &["--warmup", "4"] } else { &[] };
-            ok(&lgh(&[
-                &common[..],
+            let args = [
+                &["render"][..],
+                &SEQUENCE,
                 t,
-                w,
                 &["--frames", &frames, "-o", s(&chunk)],
-            ]
-            .concat()));
+            ];
+            ok(&lgh(&args.concat()));
         }
-        for f in 0..8 {
-            let (max_abs, flip) = diff(
-                &d.join(format!("chunk_{f}.exr")),
-                &d.join(format!("long_{f}.exr")),
-            );
-            if taa {
-                assert!(flip <= 0.01, "frame {f}: FLIP {flip}");
-            } else {
-                assert_eq!(max_abs, 0.0, "frame {f}");
-            }
-        }
+        assert_matches_one_run(&d, "long", taa, |f| d.join(format!("chunk_{f}.exr")));
     }
     let _ = std::fs::remove_dir_all(&d);
 }
@@ -210,14 +219,6 @@ fn the_openjd_template_runs_and_matches_one_render() {
     let template =
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../farm/openjd/lgh-render.yaml");
     let d = temp_dir("farm-openjd");
-    let common = [
-        "builtin:cornell-moving-light",
-        "--size",
-        "96x54",
-        "--vpls",
-        "1000",
-        "--quiet",
-    ];
     for taa in ["off", "on"] {
         let out_dir = d.join(format!("job-{taa}"));
         let run = std::process::Command::new(openjd)
@@ -251,24 +252,10 @@ fn the_openjd_template_runs_and_matches_one_render() {
             "{}",
             String::from_utf8_lossy(&run.stdout)
         );
-        let long = d.join(format!("long-{taa}_#.exr"));
-        let t: &[&str] = if taa == "on" { &["--taa"] } else { &[] };
-        ok(&lgh(&[
-            &["render"][..],
-            &common,
-            t,
-            &["--frames", "0..8", "-o", s(&long)],
-        ]
-        .concat()));
-        for f in 0..8 {
-            let job = out_dir.join(format!("frame_{f:04}.exr"));
-            let (max_abs, flip) = diff(&job, &d.join(format!("long-{taa}_{f}.exr")));
-            if taa == "on" {
-                assert!(flip <= 0.01, "frame {f}: FLIP {flip}");
-            } else {
-                assert_eq!(max_abs, 0.0, "frame {f}");
-            }
-        }
+        let name = format!("long-{taa}");
+        assert_matches_one_run(&d, &name, taa == "on", |f| {
+            out_dir.join(format!("frame_{f:04}.exr"))
+        });
     }
     let _ = std::fs::remove_dir_all(&d);
 }
