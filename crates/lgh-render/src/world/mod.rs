@@ -118,8 +118,9 @@ impl World {
     /// travel). The bounding sphere and the ray offset stay those of the loaded scene.
     ///
     /// # Errors
-    /// The animation makes the scene unrenderable at `t` (see [`World::check_time`]), or
-    /// moves geometry out of range; the world is then unchanged.
+    /// The animation makes the scene unrenderable at `t` (see [`World::check_time`]; the
+    /// world is then unchanged), or moves geometry out of range (the mesh is then posed but
+    /// its BVH is not rebuilt: do not render the world before a successful `set_time`).
     pub fn set_time(&mut self, t: f32) -> Result<(), crate::RenderError> {
         if self.scene.animation.is_empty() {
             return Ok(());
