@@ -6,7 +6,7 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-use super::{assert_error, lgh, s, temp_dir};
+use super::{assert_error, assert_ok, lgh, s, temp_dir};
 
 /// `lgh ARGS` under `ulimit -v` of 8 GB.
 fn lgh_limited(args: &[&str]) -> Output {
@@ -31,14 +31,6 @@ fn render_limited(scene: &Path, out: &Path) -> Output {
         "--vpls",
         "100",
     ])
-}
-
-fn assert_ok(out: &Output) {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
 }
 
 /// A PNG that claims `w` x `h` 8-bit RGB pixels, all zero: tiny when compressed.

@@ -4,20 +4,12 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{assert_error, lgh, s, temp_dir};
-
-fn ok(out: &std::process::Output) {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
+use super::{assert_error, assert_ok, lgh, s, temp_dir};
 
 /// `lgh diff A B --json`'s max_abs and flip.
 fn diff(a: &Path, b: &Path) -> (f64, f64) {
     let out = lgh(&["diff", s(a), s(b), "--json"]);
-    ok(&out);
+    assert_ok(&out);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     (v["max_abs"].as_f64().unwrap(), v["flip"].as_f64().unwrap())
 }
@@ -37,7 +29,7 @@ const SEQUENCE: [&str; 6] = [
 fn assert_matches_one_run(d: &Path, name: &str, taa: bool, ours: impl Fn(u32) -> PathBuf) {
     let long = d.join(format!("{name}_#.exr"));
     let t: &[&str] = if taa { &["--taa"] } else { &[] };
-    ok(&lgh(&[
+    assert_ok(&lgh(&[
         &["render"][..],
         &SEQUENCE,
         t,
@@ -66,17 +58,17 @@ fn test_scene(name: &str) -> String {
 fn tiles_against_whole(d: &Path, scene: &str, method: &str, n: u32, common: &[&str]) -> f64 {
     let whole = d.join("whole.exr");
     let base = [&["render", scene, "--method", method][..], common].concat();
-    ok(&lgh(&[&base[..], &["-o", s(&whole)]].concat()));
+    assert_ok(&lgh(&[&base[..], &["-o", s(&whole)]].concat()));
     let pieces: Vec<PathBuf> = (1..=n).map(|i| d.join(format!("t{i}.exr"))).collect();
     for (i, p) in pieces.iter().enumerate() {
         let tile = format!("{}/{n}", i + 1);
-        ok(&lgh(&[&base[..], &["--tile", &tile, "-o", s(p)]].concat()));
+        assert_ok(&lgh(&[&base[..], &["--tile", &tile, "-o", s(p)]].concat()));
     }
     let merged = d.join("merged.exr");
     let mut args = vec!["merge"];
     args.extend(pieces.iter().map(|p| s(p)));
     args.extend(["-o", s(&merged)]);
-    ok(&lgh(&args));
+    assert_ok(&lgh(&args));
     diff(&merged, &whole).0
 }
 
@@ -108,7 +100,7 @@ fn bad_pieces_are_refused_by_name() {
     let common = ["render", "--size", "64x36", "--vpls", "100", "--quiet"];
     let piece = |name: &str, tile: &str, extra: &[&str]| {
         let p = d.join(name);
-        ok(&lgh(
+        assert_ok(&lgh(
             &[&common[..], &["--tile", tile, "-o", s(&p)], extra].concat()
         ));
         p
@@ -124,7 +116,7 @@ fn bad_pieces_are_refused_by_name() {
         let refs: Vec<&str> = args.iter().map(String::as_str).collect();
         lgh(&refs)
     };
-    ok(&merge(&[&t[0], &t[1], &t[2], &t[3]]));
+    assert_ok(&merge(&[&t[0], &t[1], &t[2], &t[3]]));
     // Missing, overlapping, of another frame or other settings.
     assert_error(&merge(&[&t[0], &t[1], &t[2]]), &["missing"]);
     assert_error(
@@ -149,13 +141,13 @@ fn bad_pieces_are_refused_by_name() {
         "-o",
         s(&size),
     ]);
-    ok(&r);
+    assert_ok(&r);
     assert_error(
         &merge(&[&t[0], &t[1], &t[2], &size]),
         &["size.exr", "frame size"],
     );
     let frames = d.join("seq_#.exr");
-    ok(&lgh(&[
+    assert_ok(&lgh(&[
         &common[..],
         &["--tile", "4/4", "--frames", "1..2", "-o", s(&frames)],
     ]
@@ -199,7 +191,7 @@ fn chunks_with_warm_up_match_one_long_run() {
                 t,
                 &["--frames", &frames, "-o", s(&chunk)],
             ];
-            ok(&lgh(&args.concat()));
+            assert_ok(&lgh(&args.concat()));
         }
         assert_matches_one_run(&d, "long", taa, |f| d.join(format!("chunk_{f}.exr")));
     }

@@ -48,6 +48,15 @@ fn render_stats(d: &Path, args: &[&str]) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap()
 }
 
+/// Succeeds (its stderr is the message where it does not).
+fn assert_ok(out: &Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// Fails with exit code 2, one line on stderr that contains every `needles`, and no output.
 fn assert_error(out: &Output, needles: &[&str]) {
     let err = String::from_utf8_lossy(&out.stderr);
