@@ -39,7 +39,8 @@ pub fn frame_seed(seed: u64, k: u32) -> u64 {
 
 /// The settings of frame `k` of `frames`: its own seed (VPLs, shadow samples, direct-light
 /// samples), SLC range seed, and for more than one frame a random grid offset for `lgh` and
-/// its own sub-pixel position ([`subpixel_jitter`]), so that the mean is anti-aliased.
+/// its own sub-pixel position ([`subpixel_jitter`]), so that the mean is anti-aliased (and no
+/// frame resolves its edges itself, [`crate::passes::edge_aa`]).
 #[must_use]
 pub fn frame_settings(s: &RenderSettings, k: u32, frames: u32) -> RenderSettings {
     let mut f = s.clone();
@@ -48,6 +49,7 @@ pub fn frame_settings(s: &RenderSettings, k: u32, frames: u32) -> RenderSettings
     f.lgh.grid_jitter |= frames > 1;
     if frames > 1 {
         f.jitter = subpixel_jitter(k);
+        f.edge_samples = 1;
     }
     f
 }

@@ -6,6 +6,7 @@
 //!        lights --generate_vpls--> VPLs (light tracing)
 //!        G-buffer + lights --render_direct--> direct radiance (exact shadow rays)
 //!        G-buffer + VPLs --settings.method--> indirect radiance (crate::methods)
+//!        G-buffer + sub-pixel rays --EdgeResolve--> anti-aliased edges of every part
 //!        emission + direct + indirect --> image (the chosen component)
 //! ```
 //!
@@ -24,6 +25,7 @@ use crate::direct::render_direct;
 use crate::image::Image;
 use crate::memory::FrameMemory;
 use crate::methods::{Illumination, MethodInputs, MethodOutput, MethodStats};
+use crate::passes::edge_aa::EdgeResolve;
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::vpl_gen::{VplSet, generate_vpls};
 use crate::progress::Progress;
@@ -179,9 +181,20 @@ pub fn render_frame_with(
         "indirect"
     };
     let mut out = t.time(name, || s.method.get().render(&inputs, memory))?;
-    let emission = Image::from_pixels(w, h, g.emission.clone());
+    let mut emission = g.emission.clone();
+    let mut direct = direct;
+    let mut indirect = std::mem::take(&mut out.radiance);
+    if s.edge_samples > 1 {
+        t.time("edge_aa", || {
+            let resolve = EdgeResolve::new(world, &camera, &g, s.edge_samples);
+            for image in [&mut emission, &mut direct, &mut indirect] {
+                resolve.apply(image);
+            }
+        });
+    }
+    let emission = Image::from_pixels(w, h, emission);
     let direct = Image::from_pixels(w, h, direct);
-    let indirect = Image::from_pixels(w, h, std::mem::take(&mut out.radiance));
+    let indirect = Image::from_pixels(w, h, indirect);
     let image = compose(s.component, &emission, &direct, &indirect);
     t.0.extend(std::mem::take(&mut out.timings.0));
     t.0.push(("total".into(), start.elapsed().as_secs_f64() * 1e3));

@@ -158,6 +158,12 @@ pub struct RenderSettings {
     #[cfg_attr(feature = "clap", arg(skip))]
     #[serde(skip)]
     pub jitter: glam::Vec2,
+    /// Primary rays per pixel at geometric edges (silhouettes, creases; 1 = pixel centres
+    /// only, at most 64): edge pixels take the shading of the neighbours their sub-pixel
+    /// samples land on, so that edges are anti-aliased at the cost of a few primary rays
+    /// ([`crate::passes::edge_aa`]). An accumulation jitters whole frames instead.
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().edge_samples))]
+    pub edge_samples: u32,
     /// Number of virtual point lights (VPLs) to generate by light tracing.
     #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().vpls))]
     pub vpls: usize,
@@ -219,6 +225,7 @@ impl Default for RenderSettings {
             height: 360,
             region: None,
             jitter: glam::Vec2::ZERO,
+            edge_samples: crate::passes::edge_aa::DEFAULT_EDGE_SAMPLES,
             method: lgh::LGH,
             vpls: 10_000,
             bounces: 3,
@@ -442,6 +449,12 @@ impl RenderSettings {
         in_range("spp", self.pt.spp, 1, 1 << 20)?;
         in_range("area-samples", self.area_samples, 0, MAX_AREA_SAMPLES)?;
         in_range("bounces", self.bounces, 0, MAX_BOUNCES)?;
+        in_range(
+            "edge-samples",
+            self.edge_samples,
+            1,
+            crate::passes::edge_aa::MAX_EDGE_SAMPLES,
+        )?;
         if let Some(n) = self.tiling.interleave {
             in_range("interleave", n, 1, 16)?;
         }

@@ -113,12 +113,16 @@ impl FrameLoop {
         // Every frame its own seeds and, for lgh, its own grid offset.
         let mut settings = frame_settings(&state.settings, self.frame as u32, 2);
         // Still frames accumulate at their own sub-pixel positions (an anti-aliased image);
-        // moving frames sample pixel centres, so that nothing shimmers.
+        // moving frames, and the first still one, sample pixel centres, so that nothing
+        // shimmers, and resolve their edges from sub-pixel rays.
         settings.jitter = if still {
             lgh_render::accumulate::subpixel_jitter(self.accumulated)
         } else {
             glam::Vec2::ZERO
         };
+        if settings.jitter == glam::Vec2::ZERO {
+            settings.edge_samples = state.settings.edge_samples;
+        }
         self.frame += 1;
         let mut frame = if still || !state.taa {
             render_frame_with(&self.world, &settings, &Silent, &mut self.memory)?

@@ -1,5 +1,5 @@
 //! The passes every frame runs before its method: the G-buffer ([`gbuffer`]) and the VPLs by
-//! light tracing ([`vpl_gen`]), with the helpers of per-pixel passes. The direct light is
+//! light tracing ([`vpl_gen`]), the anti-aliasing of edges ([`edge_aa`]), with the helpers of per-pixel passes. The direct light is
 //! [`crate::direct`].
 
 use glam::Vec3;
@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use crate::progress::Progress;
 
+pub mod edge_aa;
 pub mod gbuffer;
 pub mod vpl_gen;
 

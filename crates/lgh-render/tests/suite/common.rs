@@ -124,6 +124,19 @@ pub fn cornell_world() -> lgh_render::World {
     lgh_render::World::new(scene)
 }
 
+/// A scene of the project's `scenes/` folder (`rel` from there), loaded and finished.
+pub fn project_scene(rel: &str) -> lgh_scene::Scene {
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes")
+        .join(rel);
+    lgh_scene::load(&p).unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
+/// A test scene of `scenes/test/` (`file`), prepared.
+pub fn test_scene_world(file: &str) -> lgh_render::World {
+    lgh_render::World::new(project_scene(&format!("test/{file}")))
+}
+
 /// Renders a frame on a pool of `threads` threads.
 pub fn render_on(
     world: &lgh_render::World,

@@ -94,13 +94,6 @@ fn assert_agree(name: &str, mesh: &Mesh, n: usize) {
     );
 }
 
-fn scene_file(rel: &str) -> Scene {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(rel);
-    lgh_scene::load(&p).unwrap_or_else(|e| panic!("{rel}: {e}"))
-}
-
 fn cornell() -> Scene {
     let mut s = lgh_scene::cornell::cornell_box();
     s.finish(std::path::Path::new("<built-in cornell>"))
@@ -116,7 +109,7 @@ fn backends_agree_on_a_million_rays_of_the_builtin_and_test_scenes() {
         "test/colonnade.toml",
         "test/clutter.toml",
     ] {
-        assert_agree(t, &scene_file(t).mesh, 500_000);
+        assert_agree(t, &common::project_scene(t).mesh, 500_000);
     }
 }
 
@@ -127,7 +120,7 @@ fn backends_agree_on_a_million_rays_of_the_builtin_and_test_scenes() {
 )]
 fn backends_agree_on_a_million_rays_of_the_shared_scenes() {
     for t in ["sponza.toml", "conference.toml", "cornell-box.toml"] {
-        assert_agree(t, &scene_file(t).mesh, 500_000);
+        assert_agree(t, &common::project_scene(t).mesh, 500_000);
     }
 }
 
@@ -144,7 +137,7 @@ fn brute_force_images_agree() {
     };
     for (name, scene) in [
         ("cornell", cornell()),
-        ("two-rooms", scene_file("test/two-rooms.toml")),
+        ("two-rooms", common::project_scene("test/two-rooms.toml")),
     ] {
         let images: Vec<_> = [AccelKind::Obvhs, AccelKind::Embree]
             .into_iter()

@@ -2,7 +2,6 @@
 //! agrees with the brute force over the same VPLs where the paper's estimate is biased (its
 //! convergence pixel by pixel is in `accumulate.rs`).
 
-use std::path::Path;
 
 use lgh_render::image::metrics::diff;
 use lgh_render::methods::brute::BRUTE;
@@ -14,8 +13,7 @@ use crate::common;
 /// The project's two rooms joined by a doorway (scenes/test/two-rooms.toml): a point light
 /// in one room, the camera in the other, which only light through the doorway reaches.
 fn two_rooms() -> World {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/test/two-rooms.toml");
-    World::new(lgh_scene::load(&path).expect("scenes/test/two-rooms.toml"))
+    common::test_scene_world("two-rooms.toml")
 }
 
 /// The indirect light of `method` at 80x45 with 3000 VPLs of seed `seed`.
