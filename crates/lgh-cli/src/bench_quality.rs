@@ -44,6 +44,37 @@ pub struct QualityBenchArgs {
     /// The error-against-time plot (log-log PNG: FLIP and rel_rmse per scene).
     #[arg(long, default_value = "bench-quality.png")]
     pub plot: PathBuf,
+    /// Compare lgh and slc at equal time instead: each at every VPL count of `--sweep`
+    /// against a converged reference (the mean of `--reference-frames` brute-force frames
+    /// with independent VPLs), then each at its best count within each of `--budgets`.
+    #[arg(long)]
+    pub equal_time: bool,
+    /// --equal-time: VPL counts of the sweep, comma-separated (a method stops at the first
+    /// count that takes longer than the largest budget).
+    #[arg(long, default_value = "5000,10000,20000,40000,80000,160000,320000,640000,1000000", value_parser = parse_vpl_counts)]
+    pub sweep: Counts,
+    /// --equal-time: time budgets in ms (VPL generation + indirect light), comma-separated.
+    #[arg(long, default_value = "100,200,400", value_parser = parse_budgets)]
+    pub budgets: Budgets,
+    /// --equal-time: the converged reference of each scene (EXR, in the order of the
+    /// scenes): read if it exists, else rendered and written there. Default: a file in
+    /// `--reference-dir` named by scene, size and reference settings.
+    #[arg(long)]
+    pub reference: Vec<PathBuf>,
+    /// --equal-time: where references are cached (with the mean of their first half beside
+    /// each, `NAME.half.exr`, which says how converged they are).
+    #[arg(long, default_value = "bench-references")]
+    pub reference_dir: PathBuf,
+    /// --equal-time: brute-force frames of a reference, each with its own VPLs and sub-pixel
+    /// position.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub reference_frames: u32,
+    /// --equal-time: VPLs of each reference frame.
+    #[arg(long, default_value_t = 20_000, value_parser = crate::caps::count(crate::caps::MAX_BENCH_VPLS))]
+    pub reference_vpls: usize,
+    /// --equal-time: renders per point; its time is their median.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub runs: u32,
     /// Threads and output.
     #[command(flatten)]
     pub options: BenchOptions,
@@ -84,12 +115,12 @@ fn default_scenes() -> Vec<PathBuf> {
 }
 
 /// Time of a frame's indirect light with its VPL generation.
-fn ms(f: &Frame) -> f64 {
+pub fn ms(f: &Frame) -> f64 {
     f.timings.get("indirect").unwrap_or(0.0) + f.timings.get("vpl_generation").unwrap_or(0.0)
 }
 
 /// The metrics of `f` against `reference`.
-fn measure(f: &Image, reference: &Image, exposure: f32) -> Result<(f64, f64, f64)> {
+pub fn measure(f: &Image, reference: &Image, exposure: f32) -> Result<(f64, f64, f64)> {
     let m = diff(f, reference).map_err(|e| anyhow!("{e}"))?;
     let flip = flip_mean(
         &display_bytes(f, ImageFormat::Exr, exposure),
@@ -151,12 +182,12 @@ fn series(base: &RenderSettings) -> Vec<(&'static str, String, RenderSettings)> 
     out
 }
 
-fn render(world: &World, s: &RenderSettings) -> Result<Frame> {
+pub fn render(world: &World, s: &RenderSettings) -> Result<Frame> {
     render_frame_with(world, s, &Silent, &mut FrameMemory::default()).map_err(|e| anyhow!("{e}"))
 }
 
 /// Settings for the indirect light alone at `size` with `vpls` VPLs.
-fn indirect_only(size: (u32, u32), vpls: usize) -> RenderSettings {
+pub fn indirect_only(size: (u32, u32), vpls: usize) -> RenderSettings {
     RenderSettings {
         width: size.0,
         height: size.1,
@@ -176,6 +207,52 @@ impl std::ops::Deref for Counts {
     fn deref(&self) -> &[u32] {
         &self.0
     }
+}
+
+/// Time budgets in ms.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Budgets(pub Vec<f64>);
+
+impl std::ops::Deref for Budgets {
+    type Target = [f64];
+    fn deref(&self) -> &[f64] {
+        &self.0
+    }
+}
+
+/// Parses `100,200,400` into budgets (positive, finite ms; at least one).
+fn parse_budgets(s: &str) -> Result<Budgets, String> {
+    let v = s
+        .split(',')
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+        .map(|t| match t.parse::<f64>() {
+            Ok(ms) if ms > 0.0 && ms <= 1e7 => Ok(ms),
+            _ => Err(format!("{t:?} is not a time budget in ms (above 0, at most 1e7)")),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    if v.is_empty() {
+        return Err("no budget given".into());
+    }
+    Ok(Budgets(v))
+}
+
+/// Parses `5000,10000` into VPL counts (1 to the benchmarks' cap; at least one).
+fn parse_vpl_counts(s: &str) -> Result<Counts, String> {
+    let max = crate::caps::MAX_BENCH_VPLS;
+    let v = s
+        .split(',')
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+        .map(|t| match t.parse::<u32>() {
+            Ok(n) if n >= 1 && u64::from(n) <= max => Ok(n),
+            _ => Err(format!("{t:?} is not a VPL count from 1 to {max}")),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    if v.is_empty() {
+        return Err("no VPL count given".into());
+    }
+    Ok(Counts(v))
 }
 
 /// Parses `1,2,4` (or nothing) into frame counts of 1 to 65536.
@@ -258,6 +335,9 @@ pub fn run(args: &QualityBenchArgs) -> Result<()> {
     } else {
         args.scenes.clone()
     };
+    if args.equal_time {
+        return crate::bench_equal_time::run(args, &scenes, threads);
+    }
     let mut points = Vec::new();
     let mut scene_names = Vec::new();
     for path in &scenes {

@@ -53,3 +53,19 @@ impl Progress for Bars {
         }
     }
 }
+
+/// A bar that counts `total` units of work called `what` on stderr (hidden when `quiet`, or
+/// when stderr is not a terminal).
+pub fn counter(quiet: bool, total: u64, what: &str) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(total);
+    if let Ok(style) =
+        ProgressStyle::with_template("{msg:>24} [{elapsed_precise}] {wide_bar} {pos}/{len}, eta {eta}")
+    {
+        bar.set_style(style);
+    }
+    bar.set_message(what.to_string());
+    bar
+}

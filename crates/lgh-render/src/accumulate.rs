@@ -40,7 +40,8 @@ pub fn frame_seed(seed: u64, k: u32) -> u64 {
 /// The settings of frame `k` of `frames`: its own seed (VPLs, shadow samples, direct-light
 /// samples), SLC range seed, and for more than one frame a random grid offset for `lgh` and
 /// its own sub-pixel position ([`subpixel_jitter`]), so that the mean is anti-aliased (and no
-/// frame resolves its edges itself, [`crate::passes::edge_aa`]).
+/// frame resolves its edges itself, [`crate::passes::edge_aa`]), each with the 1/d^2 clamp of
+/// all the frames' VPLs together ([`RenderSettings::vpl_clamp`] / sqrt(frames)).
 #[must_use]
 pub fn frame_settings(s: &RenderSettings, k: u32, frames: u32) -> RenderSettings {
     let mut f = s.clone();
@@ -50,6 +51,8 @@ pub fn frame_settings(s: &RenderSettings, k: u32, frames: u32) -> RenderSettings
     if frames > 1 {
         f.jitter = subpixel_jitter(k);
         f.edge_samples = 1;
+        // The clamp of the union of the frames' VPLs, so that the mean converges to it.
+        f.vpl_clamp = s.vpl_clamp / (frames as f32).sqrt();
     }
     f
 }

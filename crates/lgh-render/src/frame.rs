@@ -129,13 +129,17 @@ pub fn render_frame_with(
     let mut t = Timings::default();
     let (w, h) = (s.width, s.height);
     let camera = world.scene.camera().frame(w, h).with_jitter(s.jitter);
+    // A piece of a frame shades its rectangle and the guard band its filters reach.
+    let keep = s
+        .region
+        .map(|r| r.grown(crate::region::guard_band(s), w, h));
     let g = t.time("gbuffer", || {
         let mut g = memory.gbuffer.take().unwrap_or_default();
         if !g.shows(world, &camera, w, h) {
             g.render_into(world, &camera, w, h);
         }
-        if let Some(r) = &s.region {
-            g.clear_outside(&r.grown(crate::region::guard_band(s), w, h));
+        if let Some(r) = &keep {
+            g.clear_outside(r);
         }
         g
     });
@@ -186,7 +190,7 @@ pub fn render_frame_with(
     let mut indirect = std::mem::take(&mut out.radiance);
     if s.edge_samples > 1 {
         t.time("edge_aa", || {
-            let resolve = EdgeResolve::new(world, &camera, &g, s.edge_samples);
+            let resolve = EdgeResolve::new(world, &camera, &g, s.edge_samples, keep.as_ref());
             for image in [&mut emission, &mut direct, &mut indirect] {
                 resolve.apply(image);
             }

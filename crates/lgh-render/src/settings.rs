@@ -134,6 +134,13 @@ impl Default for Tiling {
     }
 }
 
+/// Default C of [`RenderSettings::vpl_clamp`]: eps = 0.04 R at 10,000 VPLs, the fixed
+/// 0.01 R from 160,000 on (docs/design.md, "Clamps").
+pub const DEFAULT_VPL_CLAMP: f32 = 4.0;
+
+/// Largest eps of [`RenderSettings::vpl_clamp`], as a fraction of the scene's radius.
+pub const MAX_VPL_CLAMP_FRACTION: f32 = 0.05;
+
 /// Everything that defines a frame besides the scene.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 #[cfg_attr(feature = "clap", derive(clap::Args))]
@@ -201,6 +208,13 @@ pub struct RenderSettings {
     /// (0.01, as the LGH authors' code; docs/design.md, "Clamps").
     #[cfg_attr(feature = "clap", arg(skip = RenderSettings::default().clamp_fraction))]
     pub clamp_fraction: f32,
+    /// C of the clamp that grows as VPLs get fewer: eps = R max(0.01, min(C / sqrt(VPLs),
+    /// 0.05)) with R the scene's bounding-sphere radius. A VPL stands for a patch of
+    /// surface whose size shrinks like 1 / sqrt(VPLs); near corners, where a VPL on one wall
+    /// lights the other from up close, a smaller clamp draws bright dots. 0 = the LGH
+    /// authors' fixed 0.01 R (docs/design.md, "Clamps").
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().vpl_clamp))]
+    pub vpl_clamp: f32,
     /// Ray-traced shadows of the methods that use the ratio estimator.
     #[cfg_attr(feature = "clap", command(flatten))]
     pub shadows: ShadowSettings,
@@ -237,6 +251,7 @@ impl Default for RenderSettings {
             exposure: None,
             error_bound: None,
             clamp_fraction: 0.01,
+            vpl_clamp: DEFAULT_VPL_CLAMP,
             shadows: ShadowSettings::default(),
             tiling: Tiling::default(),
             lgh: LghSettings::default(),
@@ -443,6 +458,9 @@ impl RenderSettings {
         positive("alpha", self.lgh.alpha)?;
         positive("filter-color", self.shadows.filter_color)?;
         positive("clamp-fraction", self.clamp_fraction)?;
+        if !(self.vpl_clamp.is_finite() && (0.0..=1000.0).contains(&self.vpl_clamp)) {
+            return err("vpl-clamp", &self.vpl_clamp, "expected 0 to 1000");
+        }
         if let Some(k) = self.shadows.samples {
             in_range("shadow-samples", k, 0, MAX_SHADOW_SAMPLES)?;
         }

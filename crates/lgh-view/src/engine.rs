@@ -123,6 +123,10 @@ impl FrameLoop {
         if settings.jitter == glam::Vec2::ZERO {
             settings.edge_samples = state.settings.edge_samples;
         }
+        // The 1/d^2 clamp of all the VPLs shown so far (a still view converges to the fixed
+        // clamp as frames accumulate).
+        let shown = if still { self.accumulated + 1 } else { 1 };
+        settings.vpl_clamp = state.settings.vpl_clamp / (shown as f32).sqrt();
         self.frame += 1;
         let mut frame = if still || !state.taa {
             render_frame_with(&self.world, &settings, &Silent, &mut self.memory)?

@@ -76,12 +76,24 @@ pub struct MethodInputs<'a> {
 }
 
 impl MethodInputs<'_> {
-    /// eps of the 1/(d^2 + eps^2) clamp in scene units ([`RenderSettings::clamp_fraction`]
-    /// of the scene's bounding-sphere radius).
+    /// eps of the 1/(d^2 + eps^2) clamp in scene units: R max(f, min(C / sqrt(N), 0.05)),
+    /// with R the scene's bounding-sphere radius, f [`RenderSettings::clamp_fraction`], C
+    /// [`RenderSettings::vpl_clamp`] and N the frame's VPLs.
     #[must_use]
     pub fn eps(&self) -> f32 {
-        self.settings.clamp_fraction * self.world.radius
+        clamp_eps(self.settings, self.vpls.len(), self.world.radius)
     }
+}
+
+/// [`MethodInputs::eps`] for `vpls` VPLs in a scene of radius `radius`.
+#[must_use]
+pub fn clamp_eps(s: &RenderSettings, vpls: usize, radius: f32) -> f32 {
+    let by_count = if vpls == 0 {
+        0.0
+    } else {
+        (s.vpl_clamp / (vpls as f32).sqrt()).min(crate::settings::MAX_VPL_CLAMP_FRACTION)
+    };
+    s.clamp_fraction.max(by_count) * radius
 }
 
 /// What the frame needs from a method besides its radiance.

@@ -26,6 +26,7 @@ use rayon::prelude::*;
 
 use crate::accumulate::subpixel_jitter;
 use crate::passes::gbuffer::GBuffer;
+use crate::region::Region;
 use crate::world::World;
 
 /// Default sub-pixel samples of an edge pixel (`--edge-samples`): 8 gives 9 levels of
@@ -97,10 +98,17 @@ fn neighbour(x: u32, y: u32, k: usize, w: u32, h: u32) -> Option<usize> {
 }
 
 impl EdgeResolve {
-    /// Finds the edge pixels of `g` (seen through `camera`) and resolves `samples` sub-pixel
-    /// samples of each (1 = nothing to do).
+    /// Finds the edge pixels of `g` (seen through `camera`) within `keep` (all of them if
+    /// `None`: a piece of a frame resolves only its own pixels and guard band) and resolves
+    /// `samples` sub-pixel samples of each (1 = nothing to do).
     #[must_use]
-    pub fn new(world: &World, camera: &CameraFrame, g: &GBuffer, samples: u32) -> Self {
+    pub fn new(
+        world: &World,
+        camera: &CameraFrame,
+        g: &GBuffer,
+        samples: u32,
+        keep: Option<&Region>,
+    ) -> Self {
         let (w, h) = (g.width, g.height);
         let samples = samples.clamp(1, MAX_EDGE_SAMPLES);
         let mut out = Self {
@@ -118,6 +126,9 @@ impl EdgeResolve {
             .flat_map_iter(|y| {
                 let offsets = &offsets;
                 (0..w).filter_map(move |x| {
+                    if keep.is_some_and(|r| !r.contains(x, y)) {
+                        return None;
+                    }
                     let i = y as usize * w as usize + x as usize;
                     let here = Seen::pixel(g, i);
                     let depth_of = |j: usize| {

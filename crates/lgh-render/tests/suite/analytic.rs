@@ -32,6 +32,8 @@ fn plane_under_point_light_matches_analytic_irradiance() {
         vpls: 0,
         component: Component::Direct,
         method: BRUTE_UNSHADOWED,
+        // Each pixel's shaded point, not the mean over its area (edge anti-aliasing).
+        edge_samples: 1,
         ..RenderSettings::default()
     };
     let frame = render_frame(&world, &settings, &Silent).unwrap();

@@ -23,6 +23,8 @@ fn direct(world: &World, mode: DirectMode, samples: u32, seed: u64, size: (u32, 
         direct: mode,
         area_samples: samples,
         component: Component::Direct,
+        // Each pixel's shaded point, not the mean over its area (edge anti-aliasing).
+        edge_samples: 1,
         ..RenderSettings::default()
     };
     common::render(world, &s)

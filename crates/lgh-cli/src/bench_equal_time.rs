@@ -1,0 +1,492 @@
+//! `lgh bench quality --equal-time`: for a time budget, which method gives the image closest
+//! to the converged result? Each method renders the indirect light at a sweep of VPL counts;
+//! every image is measured against a converged reference (the mean of many brute-force
+//! frames, each with its own VPL set and sub-pixel position, so that VPL noise counts as
+//! error); each method is then taken at its best VPL count within each budget.
+//!
+//! References are cached as EXR (`--reference-dir`, or one file per scene with
+//! `--reference`), with the mean of the first half of their frames beside them
+//! (`NAME.half.exr`): the FLIP between the two says how far the reference is from converged.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Result, anyhow, bail};
+use lgh_render::accumulate::frame_settings;
+use lgh_render::methods::brute::BRUTE;
+use lgh_render::methods::lgh::LGH;
+use lgh_render::methods::slc::SLC;
+use lgh_render::{Image, RenderSettings, World};
+
+use crate::bench_cmd::open_scene;
+use crate::bench_quality::{Point, QualityBenchArgs, indirect_only, measure, ms, render};
+
+/// The methods compared, at their defaults.
+const METHODS: [(&str, lgh_render::Method); 2] = [("lgh", LGH), ("slc", SLC)];
+
+/// How much lower than slc's both of lgh's errors must be to count as a win (the quality
+/// issue's 15%).
+pub const WIN_MARGIN: f64 = 0.15;
+
+/// A converged reference and what is known of its convergence.
+pub struct Reference {
+    /// The mean of every frame.
+    pub image: Image,
+    /// FLIP of the mean of the first half of the frames against the whole mean, if that
+    /// half is known.
+    pub half_flip: Option<f64>,
+}
+
+/// A method at its best VPL count within a budget.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Pick {
+    /// VPLs of the point with the lowest FLIP within the budget.
+    pub vpls_flip: usize,
+    /// Its time and FLIP.
+    pub ms_flip: f64,
+    pub flip: f64,
+    /// VPLs of the point with the lowest rel_rmse within the budget.
+    pub vpls_rmse: usize,
+    /// Its time and rel_rmse.
+    pub ms_rmse: f64,
+    pub rel_rmse: f64,
+}
+
+/// One row of the equal-time table.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Row {
+    pub scene: String,
+    pub budget_ms: f64,
+    /// None if no point of the method fits the budget.
+    pub lgh: Option<Pick>,
+    pub slc: Option<Pick>,
+}
+
+impl Row {
+    /// True if lgh's FLIP and rel_rmse are both at least [`WIN_MARGIN`] below slc's (slc
+    /// with no point in the budget loses).
+    #[must_use]
+    pub fn lgh_wins(&self) -> bool {
+        match (&self.lgh, &self.slc) {
+            (Some(l), Some(s)) => {
+                l.flip <= (1.0 - WIN_MARGIN) * s.flip
+                    && l.rel_rmse <= (1.0 - WIN_MARGIN) * s.rel_rmse
+            }
+            (Some(_), None) => true,
+            _ => false,
+        }
+    }
+}
+
+/// The VPL count of a point's setting (`V=20000`).
+fn vpls_of(p: &Point) -> usize {
+    p.setting
+        .trim_start_matches("V=")
+        .parse()
+        .unwrap_or_default()
+}
+
+/// `series` on `scene` at its best point within `budget` ms, per metric.
+#[must_use]
+pub fn pick(points: &[Point], scene: &str, series: &str, budget: f64) -> Option<Pick> {
+    let within = || {
+        points
+            .iter()
+            .filter(move |p| p.scene == scene && p.series == series && p.ms <= budget)
+    };
+    let f = within().min_by(|a, b| a.flip.total_cmp(&b.flip))?;
+    let r = within().min_by(|a, b| a.rel_rmse.total_cmp(&b.rel_rmse))?;
+    Some(Pick {
+        vpls_flip: vpls_of(f),
+        ms_flip: f.ms,
+        flip: f.flip,
+        vpls_rmse: vpls_of(r),
+        ms_rmse: r.ms,
+        rel_rmse: r.rel_rmse,
+    })
+}
+
+/// A short fingerprint of the scene file (path, size, modification time), so that a cached
+/// reference of an edited scene is not reused.
+fn fingerprint(path: &Path) -> u64 {
+    let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    let meta = std::fs::metadata(&canonical).ok();
+    let modified = meta
+        .as_ref()
+        .and_then(|m| m.modified().ok())
+        .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+        .map_or(0, |d| d.as_secs());
+    let text = canonical.to_string_lossy();
+    let mut words: Vec<u64> = text.bytes().map(u64::from).collect();
+    words.push(meta.map_or(0, |m| m.len()));
+    words.push(modified);
+    lgh_core::rng::hash(&words)
+}
+
+/// Where the reference of `scene` is cached by default.
+fn cached_path(args: &QualityBenchArgs, name: &str, scene: &Path) -> PathBuf {
+    let (w, h) = args.size;
+    args.reference_dir.join(format!(
+        "{name}-{:08x}-{w}x{h}-{}x{}.exr",
+        fingerprint(scene) as u32,
+        args.reference_frames,
+        args.reference_vpls
+    ))
+}
+
+/// The file beside `reference` that holds the mean of its first half.
+fn half_path(reference: &Path) -> PathBuf {
+    reference.with_extension("half.exr")
+}
+
+/// Loads the reference at `path` (with its half, if there), checking its size.
+fn load(path: &Path, size: (u32, u32), exposure: f32) -> Result<Reference> {
+    let image = Image::load(path).map_err(|e| anyhow!("reference {}: {e}", path.display()))?;
+    if (image.width, image.height) != size {
+        bail!(
+            "reference {}: {}x{}, the benchmark renders {}x{} (--size)",
+            path.display(),
+            image.width,
+            image.height,
+            size.0,
+            size.1
+        );
+    }
+    let half = Image::load(&half_path(path))
+        .ok()
+        .filter(|h| (h.width, h.height) == size);
+    let half_flip = match half {
+        Some(h) => Some(measure(&h, &image, exposure)?.1),
+        None => None,
+    };
+    Ok(Reference { image, half_flip })
+}
+
+/// Renders the converged reference: the mean of `--reference-frames` brute-force frames of
+/// `--reference-vpls` VPLs each, every frame with its own VPLs and sub-pixel position, and
+/// the fixed 1/d^2 clamp of many VPLs (`--vpl-clamp 0`).
+fn compute(world: &World, args: &QualityBenchArgs, name: &str) -> Result<(Image, Image)> {
+    let frames = args.reference_frames;
+    // The limit of many VPLs: the fixed clamp, whatever the VPLs of a frame.
+    let base = RenderSettings {
+        method: BRUTE,
+        vpl_clamp: 0.0,
+        ..indirect_only(args.size, args.reference_vpls)
+    };
+    let bar = crate::progress_bar::counter(
+        args.options.json,
+        u64::from(frames),
+        &format!("{name}: reference"),
+    );
+    let (w, h) = args.size;
+    let mean = |sum: &[glam::Vec3], n: u32| {
+        let inv = 1.0 / n.max(1) as f32;
+        Image::from_pixels(w, h, sum.iter().map(|p| *p * inv).collect())
+    };
+    let mut sum = vec![glam::Vec3::ZERO; w as usize * h as usize];
+    let mut half = None;
+    for k in 0..frames {
+        let f = render(world, &frame_settings(&base, k, frames))?;
+        for (s, p) in sum.iter_mut().zip(&f.indirect.pixels) {
+            *s += *p;
+        }
+        if k + 1 == frames / 2 {
+            half = Some(mean(&sum, k + 1));
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let whole = mean(&sum, frames);
+    Ok((half.unwrap_or_else(|| whole.clone()), whole))
+}
+
+/// The reference of one scene: the file `--reference` names for it, else the cache; loaded
+/// if there, else rendered and written there (with its half).
+fn reference(
+    world: &World,
+    args: &QualityBenchArgs,
+    name: &str,
+    scene: &Path,
+    index: usize,
+) -> Result<Reference> {
+    let exposure = world.scene.exposure;
+    let path = match args.reference.get(index) {
+        Some(p) => p.clone(),
+        None => cached_path(args, name, scene),
+    };
+    if path.exists() {
+        if !args.options.json {
+            eprintln!("{name}: reference {}", path.display());
+        }
+        return load(&path, args.size, exposure);
+    }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| anyhow!("reference folder {}: {e}", dir.display()))?;
+    }
+    if !args.options.json {
+        eprintln!(
+            "{name}: converged reference, {} brute-force frames of {} VPLs -> {}",
+            args.reference_frames,
+            args.reference_vpls,
+            path.display()
+        );
+    }
+    let (half, image) = compute(world, args, name)?;
+    half.save(&half_path(&path), exposure)?;
+    image.save(&path, exposure)?;
+    let half_flip = (args.reference_frames >= 2)
+        .then(|| measure(&half, &image, exposure).map(|m| m.1))
+        .transpose()?;
+    Ok(Reference { image, half_flip })
+}
+
+/// The sweep of one method on one scene: each VPL count in turn until the time passes the
+/// largest budget (larger counts only take longer). Each point's time is the median of
+/// `--runs` renders.
+fn sweep(
+    world: &World,
+    args: &QualityBenchArgs,
+    name: &str,
+    method: (&str, lgh_render::Method),
+    reference: &Image,
+) -> Result<Vec<Point>> {
+    let exposure = world.scene.exposure;
+    let largest = args.budgets.iter().copied().fold(0.0, f64::max);
+    let mut out = Vec::new();
+    for &vpls in args.sweep.iter() {
+        let s = RenderSettings {
+            method: method.1,
+            ..indirect_only(args.size, vpls as usize)
+        };
+        let f = render(world, &s)?;
+        let mut times = vec![ms(&f)];
+        for _ in 1..args.runs {
+            times.push(ms(&render(world, &s)?));
+        }
+        let (rel_rmse, flip, rel_bias) = measure(&f.indirect, reference, exposure)?;
+        let point = Point {
+            scene: name.to_string(),
+            series: method.0.to_string(),
+            setting: format!("V={vpls}"),
+            ms: crate::bench_cmd::median(times),
+            rel_rmse,
+            flip,
+            rel_bias,
+        };
+        let done = point.ms > largest;
+        out.push(point);
+        if done {
+            break;
+        }
+    }
+    Ok(out)
+}
+
+/// The equal-time table of every scene and budget.
+#[must_use]
+pub fn table(points: &[Point], scenes: &[String], budgets: &[f64]) -> Vec<Row> {
+    let mut rows = Vec::new();
+    for scene in scenes {
+        for &budget in budgets {
+            rows.push(Row {
+                scene: scene.clone(),
+                budget_ms: budget,
+                lgh: pick(points, scene, "lgh", budget),
+                slc: pick(points, scene, "slc", budget),
+            });
+        }
+    }
+    rows
+}
+
+/// Runs the equal-time benchmark.
+///
+/// # Errors
+/// A scene, reference or output cannot be read or written, or a render fails.
+pub fn run(args: &QualityBenchArgs, scenes: &[PathBuf], threads: usize) -> Result<()> {
+    let mut points = Vec::new();
+    let mut names = Vec::new();
+    let mut convergence = Vec::new();
+    if !args.reference.is_empty() && args.reference.len() != scenes.len() {
+        bail!(
+            "--reference: {} files for {} scenes (one per scene, in order)",
+            args.reference.len(),
+            scenes.len()
+        );
+    }
+    for (index, path) in scenes.iter().enumerate() {
+        let (name, world) = open_scene(Some(path), &args.options)?;
+        let reference = reference(&world, args, &name, path, index)?;
+        for method in METHODS {
+            if !args.options.json {
+                eprintln!("{name}: {} at {} VPL counts", method.0, args.sweep.len());
+            }
+            points.extend(sweep(&world, args, &name, method, &reference.image)?);
+        }
+        convergence.push((name.clone(), reference.half_flip));
+        names.push(name);
+    }
+    crate::bench_plot::plot(&args.plot, &names, &points)?;
+    let rows = table(&points, &names, &args.budgets);
+    if args.options.json {
+        let v = serde_json::json!({
+            "threads": threads,
+            "width": args.size.0,
+            "height": args.size.1,
+            "reference_frames": args.reference_frames,
+            "reference_vpls": args.reference_vpls,
+            "points": points,
+            "table": rows,
+            "convergence": convergence.iter().map(|(s, f)| serde_json::json!({"scene": s, "half_flip": f})).collect::<Vec<_>>(),
+            "plot": args.plot,
+        });
+        println!("{v}");
+        return Ok(());
+    }
+    print_table(args, &points, &rows, &convergence, threads);
+    Ok(())
+}
+
+/// The points, the equal-time table and the references' convergence, as text.
+fn print_table(
+    args: &QualityBenchArgs,
+    points: &[Point],
+    rows: &[Row],
+    convergence: &[(String, Option<f64>)],
+    threads: usize,
+) {
+    println!(
+        "Indirect light against a converged reference ({} brute-force frames of {} VPLs), {}x{}, {threads} threads",
+        args.reference_frames, args.reference_vpls, args.size.0, args.size.1
+    );
+    println!(
+        "{:<14} {:<6} {:>9} {:>9} {:>9} {:>7} {:>9}",
+        "scene", "method", "VPLs", "ms", "rel_rmse", "FLIP", "rel_bias"
+    );
+    for p in points {
+        println!(
+            "{:<14} {:<6} {:>9} {:>9.1} {:>9.4} {:>7.4} {:>+9.4}",
+            p.scene,
+            p.series,
+            vpls_of(p),
+            p.ms,
+            p.rel_rmse,
+            p.flip,
+            p.rel_bias
+        );
+    }
+    println!();
+    println!(
+        "At equal time (each method at its best VPL count within the budget; lgh wins if both errors are {:.0}% below slc's):",
+        WIN_MARGIN * 100.0
+    );
+    println!(
+        "{:<14} {:>7} {:>16} {:>16} {:>6} {:>16} {:>16} {:>6}  lgh wins",
+        "scene", "budget", "lgh FLIP (VPLs)", "slc FLIP (VPLs)", "ratio", "lgh rmse (VPLs)", "slc rmse (VPLs)", "ratio"
+    );
+    let cell = |v: Option<(f64, usize)>| match v {
+        Some((e, n)) => format!("{e:.4} ({})", short_count(n)),
+        None => "-".into(),
+    };
+    for r in rows {
+        let ratio = |l: Option<f64>, s: Option<f64>| match (l, s) {
+            (Some(l), Some(s)) if s > 0.0 => format!("{:.2}", l / s),
+            _ => "-".into(),
+        };
+        let (lf, sf) = (r.lgh.as_ref().map(|p| p.flip), r.slc.as_ref().map(|p| p.flip));
+        let (lr, sr) = (
+            r.lgh.as_ref().map(|p| p.rel_rmse),
+            r.slc.as_ref().map(|p| p.rel_rmse),
+        );
+        println!(
+            "{:<14} {:>5.0}ms {:>16} {:>16} {:>6} {:>16} {:>16} {:>6}  {}",
+            r.scene,
+            r.budget_ms,
+            cell(r.lgh.as_ref().map(|p| (p.flip, p.vpls_flip))),
+            cell(r.slc.as_ref().map(|p| (p.flip, p.vpls_flip))),
+            ratio(lf, sf),
+            cell(r.lgh.as_ref().map(|p| (p.rel_rmse, p.vpls_rmse))),
+            cell(r.slc.as_ref().map(|p| (p.rel_rmse, p.vpls_rmse))),
+            ratio(lr, sr),
+            if r.lgh_wins() { "yes" } else { "no" }
+        );
+    }
+    println!();
+    let smallest = rows
+        .iter()
+        .flat_map(|r| [&r.lgh, &r.slc])
+        .flatten()
+        .map(|p| p.flip)
+        .fold(f64::INFINITY, f64::min);
+    println!("Convergence of the references (FLIP of the first half of the frames against all; converged if below a tenth of the smallest FLIP in the table, {:.4}):", smallest / 10.0);
+    for (scene, half) in convergence {
+        match half {
+            Some(f) => println!(
+                "{scene:<14} {f:.4}  {}",
+                if *f < smallest / 10.0 { "converged" } else { "NOT converged: more --reference-frames" }
+            ),
+            None => println!("{scene:<14} unknown (no half file beside the reference)"),
+        }
+    }
+    println!("plot: {}", args.plot.display());
+}
+
+/// 20000 as "20K", 1000000 as "1M".
+fn short_count(n: usize) -> String {
+    if n >= 1_000_000 && n % 1_000_000 == 0 {
+        format!("{}M", n / 1_000_000)
+    } else if n >= 1000 && n % 1000 == 0 {
+        format!("{}K", n / 1000)
+    } else {
+        n.to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(series: &str, vpls: usize, ms: f64, flip: f64, rel_rmse: f64) -> Point {
+        Point {
+            scene: "s".into(),
+            series: series.into(),
+            setting: format!("V={vpls}"),
+            ms,
+            rel_rmse,
+            flip,
+            rel_bias: 0.0,
+        }
+    }
+
+    /// Each method is taken at its best point within the budget, per metric; lgh wins only
+    /// with both errors 15% below slc's.
+    #[test]
+    fn equal_time_picks_the_best_point_within_the_budget() {
+        let points = vec![
+            point("lgh", 10_000, 50.0, 0.10, 0.30),
+            point("lgh", 20_000, 90.0, 0.08, 0.32),
+            point("lgh", 40_000, 180.0, 0.06, 0.20),
+            point("slc", 10_000, 60.0, 0.11, 0.40),
+            point("slc", 20_000, 150.0, 0.09, 0.35),
+        ];
+        let p = pick(&points, "s", "lgh", 100.0).unwrap();
+        assert_eq!((p.vpls_flip, p.flip), (20_000, 0.08));
+        assert_eq!((p.vpls_rmse, p.rel_rmse), (10_000, 0.30));
+        assert!(pick(&points, "s", "lgh", 40.0).is_none());
+        let rows = table(&points, &["s".to_string()], &[100.0, 200.0, 40.0]);
+        // 100 ms: lgh 0.08 / 0.30 against slc 0.11 / 0.40: both 15% lower.
+        assert!(rows[0].lgh_wins());
+        // 200 ms: 0.06 / 0.20 against 0.09 / 0.35.
+        assert!(rows[1].lgh_wins());
+        // 40 ms: nobody fits.
+        assert!(!rows[2].lgh_wins());
+        let close = vec![
+            point("lgh", 10_000, 50.0, 0.095, 0.10),
+            point("slc", 10_000, 50.0, 0.10, 0.40),
+        ];
+        assert!(!table(&close, &["s".to_string()], &[100.0])[0].lgh_wins());
+        assert_eq!(short_count(20_000), "20K");
+        assert_eq!(short_count(1_000_000), "1M");
+        assert_eq!(short_count(1500), "1500");
+    }
+}
