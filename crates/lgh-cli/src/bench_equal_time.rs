@@ -382,7 +382,14 @@ fn print_table(
     );
     println!(
         "{:<14} {:>7} {:>16} {:>16} {:>6} {:>16} {:>16} {:>6}  lgh wins",
-        "scene", "budget", "lgh FLIP (VPLs)", "slc FLIP (VPLs)", "ratio", "lgh rmse (VPLs)", "slc rmse (VPLs)", "ratio"
+        "scene",
+        "budget",
+        "lgh FLIP (VPLs)",
+        "slc FLIP (VPLs)",
+        "ratio",
+        "lgh rmse (VPLs)",
+        "slc rmse (VPLs)",
+        "ratio"
     );
     let cell = |v: Option<(f64, usize)>| match v {
         Some((e, n)) => format!("{e:.4} ({})", short_count(n)),
@@ -393,7 +400,10 @@ fn print_table(
             (Some(l), Some(s)) if s > 0.0 => format!("{:.2}", l / s),
             _ => "-".into(),
         };
-        let (lf, sf) = (r.lgh.as_ref().map(|p| p.flip), r.slc.as_ref().map(|p| p.flip));
+        let (lf, sf) = (
+            r.lgh.as_ref().map(|p| p.flip),
+            r.slc.as_ref().map(|p| p.flip),
+        );
         let (lr, sr) = (
             r.lgh.as_ref().map(|p| p.rel_rmse),
             r.slc.as_ref().map(|p| p.rel_rmse),
@@ -418,12 +428,19 @@ fn print_table(
         .flatten()
         .map(|p| p.flip)
         .fold(f64::INFINITY, f64::min);
-    println!("Convergence of the references (FLIP of the first half of the frames against all; converged if below a tenth of the smallest FLIP in the table, {:.4}):", smallest / 10.0);
+    println!(
+        "Convergence of the references (FLIP of the first half of the frames against all; converged if below a tenth of the smallest FLIP in the table, {:.4}):",
+        smallest / 10.0
+    );
     for (scene, half) in convergence {
         match half {
             Some(f) => println!(
                 "{scene:<14} {f:.4}  {}",
-                if *f < smallest / 10.0 { "converged" } else { "NOT converged: more --reference-frames" }
+                if *f < smallest / 10.0 {
+                    "converged"
+                } else {
+                    "NOT converged: more --reference-frames"
+                }
             ),
             None => println!("{scene:<14} unknown (no half file beside the reference)"),
         }
@@ -433,9 +450,9 @@ fn print_table(
 
 /// 20000 as "20K", 1000000 as "1M".
 fn short_count(n: usize) -> String {
-    if n >= 1_000_000 && n % 1_000_000 == 0 {
+    if n >= 1_000_000 && n.is_multiple_of(1_000_000) {
         format!("{}M", n / 1_000_000)
-    } else if n >= 1000 && n % 1000 == 0 {
+    } else if n >= 1000 && n.is_multiple_of(1000) {
         format!("{}K", n / 1000)
     } else {
         n.to_string()

@@ -228,7 +228,9 @@ fn parse_budgets(s: &str) -> Result<Budgets, String> {
         .filter(|t| !t.is_empty())
         .map(|t| match t.parse::<f64>() {
             Ok(ms) if ms > 0.0 && ms <= 1e7 => Ok(ms),
-            _ => Err(format!("{t:?} is not a time budget in ms (above 0, at most 1e7)")),
+            _ => Err(format!(
+                "{t:?} is not a time budget in ms (above 0, at most 1e7)"
+            )),
         })
         .collect::<Result<Vec<_>, _>>()?;
     if v.is_empty() {

@@ -9,8 +9,8 @@
 
 mod bench_build;
 mod bench_cmd;
-mod bench_plot;
 mod bench_equal_time;
+mod bench_plot;
 mod bench_quality;
 mod bench_render;
 mod bench_slc;

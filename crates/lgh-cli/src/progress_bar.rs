@@ -61,9 +61,9 @@ pub fn counter(quiet: bool, total: u64, what: &str) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let bar = ProgressBar::new(total);
-    if let Ok(style) =
-        ProgressStyle::with_template("{msg:>24} [{elapsed_precise}] {wide_bar} {pos}/{len}, eta {eta}")
-    {
+    if let Ok(style) = ProgressStyle::with_template(
+        "{msg:>24} [{elapsed_precise}] {wide_bar} {pos}/{len}, eta {eta}",
+    ) {
         bar.set_style(style);
     }
     bar.set_message(what.to_string());

@@ -2,6 +2,7 @@
 
 mod accel;
 mod bombs;
+mod equal_time;
 mod farm;
 mod gpu;
 mod hardening;

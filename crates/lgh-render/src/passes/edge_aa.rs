@@ -134,7 +134,8 @@ impl EdgeResolve {
                     let depth_of = |j: usize| {
                         if g.is_hit(j) { g.depth[j] } else { 1.0 }
                     };
-                    let near: [Option<usize>; 9] = std::array::from_fn(|k| neighbour(x, y, k, w, h));
+                    let near: [Option<usize>; 9] =
+                        std::array::from_fn(|k| neighbour(x, y, k, w, h));
                     let edge = near
                         .iter()
                         .flatten()
@@ -145,7 +146,10 @@ impl EdgeResolve {
                     let mut counts = [0u8; 9];
                     counts[4] = 1; // the centre sample is the pixel's own shaded point
                     for &o in &offsets[1..] {
-                        let s = world.trace(camera.origin, camera.direction(camera.sample_point(x, y) + o));
+                        let s = world.trace(
+                            camera.origin,
+                            camera.direction(camera.sample_point(x, y) + o),
+                        );
                         let seen = Seen {
                             hit: s.as_ref().map(|s| (s.position, s.geo_normal)),
                             emits: s.is_some_and(|s| s.emission != Vec3::ZERO),

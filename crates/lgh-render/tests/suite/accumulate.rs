@@ -146,7 +146,11 @@ fn accumulation_is_anti_aliased() {
 fn one_frame_resolves_its_edges() {
     let scenes = [
         ("cornell", common::cornell_world(), 0.5),
-        ("two-rooms", common::test_scene_world("two-rooms.toml"), 0.75),
+        (
+            "two-rooms",
+            common::test_scene_world("two-rooms.toml"),
+            0.75,
+        ),
     ];
     for (name, world, most) in scenes {
         let base = direct_64x36();
@@ -163,7 +167,10 @@ fn one_frame_resolves_its_edges() {
         let centres = diff(&frame(1).image, &reference).unwrap().rel_rmse;
         let resolved = frame(lgh_render::passes::edge_aa::DEFAULT_EDGE_SAMPLES);
         let aa = diff(&resolved.image, &reference).unwrap().rel_rmse;
-        assert!(aa < most * centres, "{name}: resolved {aa} against centres {centres}");
+        assert!(
+            aa < most * centres,
+            "{name}: resolved {aa} against centres {centres}"
+        );
         assert!(resolved.timings.get("edge_aa").is_some());
     }
     let s = lgh_render::accumulate::frame_settings(&RenderSettings::default(), 1, 4);

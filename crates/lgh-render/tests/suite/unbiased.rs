@@ -2,7 +2,6 @@
 //! agrees with the brute force over the same VPLs where the paper's estimate is biased (its
 //! convergence pixel by pixel is in `accumulate.rs`).
 
-
 use lgh_render::image::metrics::diff;
 use lgh_render::methods::brute::BRUTE;
 use lgh_render::methods::lgh::{Estimator, LGH, LghSettings};

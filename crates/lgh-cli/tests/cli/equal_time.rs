@@ -1,0 +1,133 @@
+//! `lgh bench quality --equal-time`: lgh and slc against a converged reference, cached and
+//! reused, at equal time.
+
+use crate::{assert_error, assert_ok, lgh, s, temp_dir};
+
+/// The project's two rooms joined by a doorway.
+fn two_rooms() -> String {
+    let p =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/test/two-rooms.toml");
+    p.to_string_lossy().into_owned()
+}
+
+/// Both methods are swept on every scene, the table has a row per scene and budget with
+/// each method's best point, the references are written with their halves and measured for
+/// convergence, and a second run that names a reference reads it (its points are the
+/// same: the renders are deterministic).
+#[test]
+fn equal_time_sweeps_both_methods_against_a_cached_reference() {
+    let d = temp_dir("equal-time");
+    let refs = d.join("refs");
+    let plot = d.join("et.png");
+    let rooms = two_rooms();
+    let args = |scenes: &[&str], extra: &[&str]| {
+        let base = [
+            "bench",
+            "quality",
+            "--equal-time",
+            "--size",
+            "32x18",
+            "--sweep",
+            "100,200",
+            "--budgets",
+            "100000,1e7",
+            "--reference-frames",
+            "2",
+            "--reference-vpls",
+            "300",
+            "--runs",
+            "1",
+            "--plot",
+            s(&plot),
+            "--json",
+        ];
+        [&base[..], scenes, extra]
+            .concat()
+            .iter()
+            .map(|a| a.to_string())
+            .collect::<Vec<_>>()
+    };
+    let run = |a: Vec<String>| {
+        let a: Vec<&str> = a.iter().map(String::as_str).collect();
+        let out = lgh(&a);
+        assert_ok(&out);
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
+    };
+    let v = run(args(
+        &["builtin:cornell", &rooms],
+        &["--reference-dir", s(&refs)],
+    ));
+    let points = v["points"].as_array().unwrap();
+    for scene in ["cornell", "two-rooms"] {
+        for method in ["lgh", "slc"] {
+            let n = points
+                .iter()
+                .filter(|p| p["scene"] == scene && p["series"] == method)
+                .inspect(|p| assert!(p["flip"].as_f64().unwrap() > 0.0, "{p}"))
+                .count();
+            assert_eq!(n, 2, "{scene} {method}");
+        }
+    }
+    let table = v["table"].as_array().unwrap();
+    assert_eq!(table.len(), 4);
+    for row in table {
+        for method in ["lgh", "slc"] {
+            assert!(row[method]["flip"].as_f64().unwrap() > 0.0, "{row}");
+        }
+    }
+    for c in v["convergence"].as_array().unwrap() {
+        assert!(c["half_flip"].as_f64().unwrap() > 0.0, "{c}");
+    }
+    assert!(std::fs::metadata(&plot).unwrap().len() > 1000);
+    let mut files: Vec<_> = std::fs::read_dir(&refs)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 4, "{files:?}");
+    let cornell = files
+        .iter()
+        .find(|p| {
+            let name = p.file_name().unwrap().to_string_lossy();
+            name.starts_with("cornell") && !name.ends_with(".half.exr")
+        })
+        .unwrap();
+    let again = run(args(&["builtin:cornell"], &["--reference", s(cornell)]));
+    let flips = |v: &serde_json::Value, scene: &str| -> Vec<f64> {
+        v["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|p| p["scene"] == scene)
+            .map(|p| p["flip"].as_f64().unwrap())
+            .collect()
+    };
+    assert_eq!(flips(&again, "cornell"), flips(&v, "cornell"));
+    // One reference file a scene, of the benchmark's size.
+    assert_error(
+        &lgh(&args(
+            &["builtin:cornell"],
+            &["--reference", s(cornell), "--reference", s(cornell)],
+        )
+        .iter()
+        .map(String::as_str)
+        .collect::<Vec<_>>()),
+        &["--reference", "2 files for 1 scenes"],
+    );
+    let mut wrong_size = args(&["builtin:cornell"], &["--reference", s(cornell)]);
+    wrong_size[4] = "16x9".into();
+    assert_error(
+        &lgh(&wrong_size.iter().map(String::as_str).collect::<Vec<_>>()),
+        &["32x18", "16x9"],
+    );
+    for (flag, value, needle) in [
+        ("--budgets", "0", "time budget"),
+        ("--budgets", "", "no budget"),
+        ("--sweep", "0", "VPL count"),
+    ] {
+        assert_error(
+            &lgh(&["bench", "quality", "--equal-time", flag, value]),
+            &[flag, needle],
+        );
+    }
+}
