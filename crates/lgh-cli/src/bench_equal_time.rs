@@ -309,7 +309,7 @@ pub fn run(args: &QualityBenchArgs, scenes: &[PathBuf], threads: usize) -> Resul
     let mut convergence = Vec::new();
     if !args.reference.is_empty() && args.reference.len() != scenes.len() {
         bail!(
-            "--reference: {} files for {} scenes (one per scene, in order)",
+            "--reference: {} given for {} scene(s); name one file per scene, in order",
             args.reference.len(),
             scenes.len()
         );

@@ -112,7 +112,7 @@ fn equal_time_sweeps_both_methods_against_a_cached_reference() {
         .iter()
         .map(String::as_str)
         .collect::<Vec<_>>()),
-        &["--reference", "2 files for 1 scenes"],
+        &["--reference", "2 given for 1 scene(s)"],
     );
     let mut wrong_size = args(&["builtin:cornell"], &["--reference", s(cornell)]);
     wrong_size[4] = "16x9".into();
