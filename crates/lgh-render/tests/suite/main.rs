@@ -3,6 +3,7 @@
 mod accel;
 mod accumulate;
 mod analytic;
+mod clamp;
 mod common;
 mod convergence;
 mod determinism;
