@@ -3,11 +3,15 @@
 //! need them are `#[ignore]`d, shown as ignored rather than passed, in a build without them.
 //! Likewise `cfg(openjd)` when PyPI's openjd-cli is found (the `LGH_OPENJD` variable naming
 //! its `openjd`, or `openjd` on the PATH), whose path the farm test gets as `LGH_OPENJD_BIN`.
+//! And `cfg(gpu_adapter)` as lgh-gpu's build sets it, for the tests that run the GPU.
 
 const MODELS: &str = "/usr/share/assimp/models";
 const XVFB_RUN: &str = "/usr/bin/xvfb-run";
 
+include!("../lgh-gpu/gpu_adapter.rs");
+
 fn main() {
+    emit_gpu_adapter_cfg();
     println!("cargo::rustc-check-cfg=cfg(assimp_models)");
     println!("cargo::rustc-check-cfg=cfg(xvfb)");
     println!("cargo::rerun-if-changed={XVFB_RUN}");

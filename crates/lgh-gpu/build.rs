@@ -3,30 +3,8 @@
 //! Mesa's lavapipe from Debian's `mesa-vulkan-drivers`), or when `LGH_GPU_TESTS` is set. The
 //! tests that need an adapter are ignored elsewhere (shown as ignored, which CI refuses).
 
+include!("gpu_adapter.rs");
+
 fn main() {
-    println!("cargo::rustc-check-cfg=cfg(gpu_adapter)");
-    println!("cargo::rerun-if-env-changed=LGH_GPU_TESTS");
-    println!("cargo::rerun-if-env-changed=VK_DRIVER_FILES");
-    let icd_dirs = [
-        "/usr/share/vulkan/icd.d",
-        "/etc/vulkan/icd.d",
-        "/usr/local/share/vulkan/icd.d",
-    ];
-    for d in icd_dirs {
-        println!("cargo::rerun-if-changed={d}");
-    }
-    let os = std::env::var("CARGO_CFG_TARGET_OS").unwrap_or_default();
-    let vulkan_driver = std::env::var_os("VK_DRIVER_FILES").is_some()
-        || icd_dirs.iter().any(|d| {
-            std::fs::read_dir(d).is_ok_and(|mut e| {
-                e.any(|f| f.is_ok_and(|f| f.path().extension().is_some_and(|x| x == "json")))
-            })
-        });
-    if os == "macos"
-        || os == "windows"
-        || vulkan_driver
-        || std::env::var_os("LGH_GPU_TESTS").is_some()
-    {
-        println!("cargo::rustc-cfg=gpu_adapter");
-    }
+    emit_gpu_adapter_cfg();
 }

@@ -19,6 +19,7 @@ use lgh_render::{Image, RenderSettings, World};
 
 use crate::bench_cmd::open_scene;
 use crate::bench_quality::{Point, QualityBenchArgs, indirect_only, measure, ms, render};
+use crate::render_cmd::args::Device;
 
 /// The methods compared, at their defaults.
 const METHODS: [(&str, lgh_render::Method); 2] = [("lgh", LGH), ("slc", SLC)];
@@ -166,9 +167,20 @@ fn load(path: &Path, size: (u32, u32), exposure: f32) -> Result<Reference> {
 /// the fixed 1/d^2 clamp of many VPLs (`--vpl-clamp 0`).
 fn compute(world: &World, args: &QualityBenchArgs, name: &str) -> Result<(Image, Image)> {
     let frames = args.reference_frames;
+    let method = match args.reference_device {
+        Device::Cpu => BRUTE,
+        Device::Gpu => {
+            let gpu = lgh_gpu::gpu_method(BRUTE)
+                .ok_or_else(|| lgh_gpu::GpuError::NotPorted("brute".into()))?;
+            if !args.options.json {
+                eprintln!("GPU: {}", lgh_gpu::GpuContext::shared()?.adapter_name());
+            }
+            gpu
+        }
+    };
     // The limit of many VPLs: the fixed clamp, whatever the VPLs of a frame.
     let base = RenderSettings {
-        method: BRUTE,
+        method,
         vpl_clamp: 0.0,
         ..indirect_only(args.size, args.reference_vpls)
     };

@@ -69,6 +69,10 @@ pub struct QualityBenchArgs {
     /// position.
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub reference_frames: u32,
+    /// --equal-time: where the references' brute force runs: `gpu` (wgpu: Vulkan, Metal or
+    /// DX12) converges them in a fraction of the time on a real GPU.
+    #[arg(long, value_enum, default_value_t = crate::render_cmd::args::Device::Cpu)]
+    pub reference_device: crate::render_cmd::args::Device,
     /// --equal-time: VPLs of each reference frame.
     #[arg(long, default_value_t = 20_000, value_parser = crate::caps::count(crate::caps::MAX_BENCH_VPLS))]
     pub reference_vpls: usize,

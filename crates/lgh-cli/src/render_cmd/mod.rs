@@ -1,6 +1,6 @@
 //! `lgh render`: one frame, or a sequence of frames, to image files.
 
-mod args;
+pub mod args;
 pub mod piece;
 mod stats;
 

@@ -131,3 +131,52 @@ fn equal_time_sweeps_both_methods_against_a_cached_reference() {
         );
     }
 }
+
+/// `--reference-device gpu` renders the reference's brute force on the GPU (lavapipe in CI):
+/// the same image as the CPU's within rel_rmse 0.002 (the GPU issue's bound for the brute
+/// force; measured 3e-7 on lavapipe).
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver such as Debian's mesa-vulkan-drivers)"
+)]
+fn the_reference_renders_on_the_gpu_as_on_the_cpu() {
+    let d = temp_dir("equal-time-gpu");
+    let reference = |device: &str| {
+        let file = d.join(format!("{device}.exr"));
+        let plot = d.join(format!("{device}.png"));
+        assert_ok(&lgh(&[
+            "bench",
+            "quality",
+            "--equal-time",
+            "builtin:cornell",
+            "--size",
+            "48x27",
+            "--sweep",
+            "100",
+            "--reference-frames",
+            "2",
+            "--reference-vpls",
+            "500",
+            "--reference-device",
+            device,
+            "--reference",
+            s(&file),
+            "--runs",
+            "1",
+            "--plot",
+            s(&plot),
+            "--json",
+        ]));
+        file
+    };
+    let (cpu, gpu) = (reference("cpu"), reference("gpu"));
+    let out = lgh(&["diff", s(&gpu), s(&cpu), "--json"]);
+    assert_ok(&out);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rel_rmse = v["rel_rmse"].as_f64().unwrap();
+    assert!(
+        rel_rmse < 0.002,
+        "GPU reference against CPU: rel_rmse {rel_rmse}"
+    );
+}
