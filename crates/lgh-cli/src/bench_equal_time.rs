@@ -21,8 +21,42 @@ use crate::bench_cmd::open_scene;
 use crate::bench_quality::{Point, QualityBenchArgs, indirect_only, measure, ms, render};
 use crate::render_cmd::args::Device;
 
-/// The methods compared, at their defaults.
-const METHODS: [(&str, lgh_render::Method); 2] = [("lgh", LGH), ("slc", SLC)];
+/// The curves of the sweep: (series name, the method it belongs to, settings without the
+/// VPL count): lgh at each of `--alphas`, slc at each of `--error-bounds`; a setting equal
+/// to the method's default is named after the method alone.
+fn curves(args: &QualityBenchArgs) -> Vec<(String, &'static str, RenderSettings)> {
+    let base = indirect_only(args.size, 0);
+    let mut out = Vec::new();
+    for &alpha in args.alphas.iter() {
+        let mut s = RenderSettings {
+            method: LGH,
+            ..base.clone()
+        };
+        let default = f64::from(s.lgh.alpha) == alpha;
+        s.lgh.alpha = alpha as f32;
+        let name = if default {
+            "lgh".into()
+        } else {
+            format!("lgh alpha {alpha}")
+        };
+        out.push((name, "lgh", s));
+    }
+    for &bound in args.error_bounds.iter() {
+        let s = RenderSettings {
+            method: SLC,
+            error_bound: Some(bound as f32),
+            ..base.clone()
+        };
+        let default = bound == f64::from(lgh_render::methods::slc::DEFAULT_ERROR_BOUND);
+        let name = if default {
+            "slc".into()
+        } else {
+            format!("slc eb={bound}")
+        };
+        out.push((name, "slc", s));
+    }
+    out
+}
 
 /// How much lower than slc's both of lgh's errors must be to count as a win (the quality
 /// issue's 15%).
@@ -37,15 +71,19 @@ pub struct Reference {
     pub half_flip: Option<f64>,
 }
 
-/// A method at its best VPL count within a budget.
+/// A method at its best curve and VPL count within a budget.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Pick {
-    /// VPLs of the point with the lowest FLIP within the budget.
+    /// The curve of the point with the lowest FLIP within the budget.
+    pub series_flip: String,
+    /// Its VPLs.
     pub vpls_flip: usize,
     /// Its time and FLIP.
     pub ms_flip: f64,
     pub flip: f64,
-    /// VPLs of the point with the lowest rel_rmse within the budget.
+    /// The curve of the point with the lowest rel_rmse within the budget.
+    pub series_rmse: String,
+    /// Its VPLs.
     pub vpls_rmse: usize,
     /// Its time and rel_rmse.
     pub ms_rmse: f64,
@@ -86,20 +124,30 @@ fn vpls_of(p: &Point) -> usize {
         .unwrap_or_default()
 }
 
-/// `series` on `scene` at its best point within `budget` ms, per metric.
+/// True if `series` is a curve of `method` (`lgh`, `lgh alpha 2`).
+fn of_method(series: &str, method: &str) -> bool {
+    series == method
+        || series
+            .strip_prefix(method)
+            .is_some_and(|r| r.starts_with(' '))
+}
+
+/// `method` on `scene` at its best point (over its curves) within `budget` ms, per metric.
 #[must_use]
-pub fn pick(points: &[Point], scene: &str, series: &str, budget: f64) -> Option<Pick> {
+pub fn pick(points: &[Point], scene: &str, method: &str, budget: f64) -> Option<Pick> {
     let within = || {
         points
             .iter()
-            .filter(move |p| p.scene == scene && p.series == series && p.ms <= budget)
+            .filter(move |p| p.scene == scene && of_method(&p.series, method) && p.ms <= budget)
     };
     let f = within().min_by(|a, b| a.flip.total_cmp(&b.flip))?;
     let r = within().min_by(|a, b| a.rel_rmse.total_cmp(&b.rel_rmse))?;
     Some(Pick {
+        series_flip: f.series.clone(),
         vpls_flip: vpls_of(f),
         ms_flip: f.ms,
         flip: f.flip,
+        series_rmse: r.series.clone(),
         vpls_rmse: vpls_of(r),
         ms_rmse: r.ms,
         rel_rmse: r.rel_rmse,
@@ -259,7 +307,7 @@ fn sweep(
     world: &World,
     args: &QualityBenchArgs,
     name: &str,
-    method: (&str, lgh_render::Method),
+    (series, settings): (&str, &RenderSettings),
     reference: &Image,
 ) -> Result<Vec<Point>> {
     let exposure = world.scene.exposure;
@@ -267,8 +315,8 @@ fn sweep(
     let mut out = Vec::new();
     for &vpls in args.sweep.iter() {
         let s = RenderSettings {
-            method: method.1,
-            ..indirect_only(args.size, vpls as usize)
+            vpls: vpls as usize,
+            ..settings.clone()
         };
         let f = render(world, &s)?;
         let mut times = vec![ms(&f)];
@@ -278,7 +326,7 @@ fn sweep(
         let (rel_rmse, flip, rel_bias) = measure(&f.indirect, reference, exposure)?;
         let point = Point {
             scene: name.to_string(),
-            series: method.0.to_string(),
+            series: series.to_string(),
             setting: format!("V={vpls}"),
             ms: crate::bench_cmd::median(times),
             rel_rmse,
@@ -329,11 +377,17 @@ pub fn run(args: &QualityBenchArgs, scenes: &[PathBuf], threads: usize) -> Resul
     for (index, path) in scenes.iter().enumerate() {
         let (name, world) = open_scene(Some(path), &args.options)?;
         let reference = reference(&world, args, &name, path, index)?;
-        for method in METHODS {
+        for (series, _, settings) in curves(args) {
             if !args.options.json {
-                eprintln!("{name}: {} at {} VPL counts", method.0, args.sweep.len());
+                eprintln!("{name}: {series} at up to {} VPL counts", args.sweep.len());
             }
-            points.extend(sweep(&world, args, &name, method, &reference.image)?);
+            points.extend(sweep(
+                &world,
+                args,
+                &name,
+                (&series, &settings),
+                &reference.image,
+            )?);
         }
         convergence.push((name.clone(), reference.half_flip));
         names.push(name);
@@ -372,12 +426,12 @@ fn print_table(
         args.reference_frames, args.reference_vpls, args.size.0, args.size.1
     );
     println!(
-        "{:<14} {:<6} {:>9} {:>9} {:>9} {:>7} {:>9}",
+        "{:<14} {:<16} {:>9} {:>9} {:>9} {:>7} {:>9}",
         "scene", "method", "VPLs", "ms", "rel_rmse", "FLIP", "rel_bias"
     );
     for p in points {
         println!(
-            "{:<14} {:<6} {:>9} {:>9.1} {:>9.4} {:>7.4} {:>+9.4}",
+            "{:<14} {:<16} {:>9} {:>9.1} {:>9.4} {:>7.4} {:>+9.4}",
             p.scene,
             p.series,
             vpls_of(p),
@@ -389,11 +443,11 @@ fn print_table(
     }
     println!();
     println!(
-        "At equal time (each method at its best VPL count within the budget; lgh wins if both errors are {:.0}% below slc's):",
+        "At equal time (each method at its best curve and VPL count within the budget; lgh wins if both errors are {:.0}% below slc's):",
         WIN_MARGIN * 100.0
     );
     println!(
-        "{:<14} {:>7} {:>16} {:>16} {:>6} {:>16} {:>16} {:>6}  lgh wins",
+        "{:<14} {:>7} {:>22} {:>22} {:>6} {:>22} {:>22} {:>6}  lgh wins",
         "scene",
         "budget",
         "lgh FLIP (VPLs)",
@@ -403,8 +457,12 @@ fn print_table(
         "slc rmse (VPLs)",
         "ratio"
     );
-    let cell = |v: Option<(f64, usize)>| match v {
-        Some((e, n)) => format!("{e:.4} ({})", short_count(n)),
+    // The error, the VPLs and the curve where it is not the method's default.
+    let cell = |v: Option<(f64, usize, &str)>| match v {
+        Some((e, n, series)) => match series.split_once(' ') {
+            Some((_, setting)) => format!("{e:.4} ({}, {setting})", short_count(n)),
+            None => format!("{e:.4} ({})", short_count(n)),
+        },
         None => "-".into(),
     };
     for r in rows {
@@ -421,14 +479,30 @@ fn print_table(
             r.slc.as_ref().map(|p| p.rel_rmse),
         );
         println!(
-            "{:<14} {:>5.0}ms {:>16} {:>16} {:>6} {:>16} {:>16} {:>6}  {}",
+            "{:<14} {:>5.0}ms {:>22} {:>22} {:>6} {:>22} {:>22} {:>6}  {}",
             r.scene,
             r.budget_ms,
-            cell(r.lgh.as_ref().map(|p| (p.flip, p.vpls_flip))),
-            cell(r.slc.as_ref().map(|p| (p.flip, p.vpls_flip))),
+            cell(
+                r.lgh
+                    .as_ref()
+                    .map(|p| (p.flip, p.vpls_flip, p.series_flip.as_str()))
+            ),
+            cell(
+                r.slc
+                    .as_ref()
+                    .map(|p| (p.flip, p.vpls_flip, p.series_flip.as_str()))
+            ),
             ratio(lf, sf),
-            cell(r.lgh.as_ref().map(|p| (p.rel_rmse, p.vpls_rmse))),
-            cell(r.slc.as_ref().map(|p| (p.rel_rmse, p.vpls_rmse))),
+            cell(
+                r.lgh
+                    .as_ref()
+                    .map(|p| (p.rel_rmse, p.vpls_rmse, p.series_rmse.as_str()))
+            ),
+            cell(
+                r.slc
+                    .as_ref()
+                    .map(|p| (p.rel_rmse, p.vpls_rmse, p.series_rmse.as_str()))
+            ),
             ratio(lr, sr),
             if r.lgh_wins() { "yes" } else { "no" }
         );
@@ -509,6 +583,21 @@ mod tests {
         assert!(rows[1].lgh_wins());
         // 40 ms: nobody fits.
         assert!(!rows[2].lgh_wins());
+        // A method's other curves count too, and a series name only starts like one.
+        let more = [
+            points.clone(),
+            vec![
+                point("lgh alpha 2", 40_000, 95.0, 0.05, 0.25),
+                point("lghx", 10_000, 10.0, 0.001, 0.001),
+            ],
+        ]
+        .concat();
+        let p = pick(&more, "s", "lgh", 100.0).unwrap();
+        assert_eq!(
+            (p.series_flip.as_str(), p.vpls_flip),
+            ("lgh alpha 2", 40_000)
+        );
+        assert_eq!(p.series_rmse, "lgh alpha 2");
         let close = vec![
             point("lgh", 10_000, 50.0, 0.095, 0.10),
             point("slc", 10_000, 50.0, 0.10, 0.40),

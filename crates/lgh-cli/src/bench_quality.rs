@@ -56,6 +56,14 @@ pub struct QualityBenchArgs {
     /// --equal-time: time budgets in ms (VPL generation + indirect light), comma-separated.
     #[arg(long, default_value = "100,200,400", value_parser = parse_budgets)]
     pub budgets: Budgets,
+    /// --equal-time: lgh's alphas, comma-separated, each its own curve (default: lgh's
+    /// default alone); a method is taken at its best curve and VPL count within a budget.
+    #[arg(long, default_value = "3", value_parser = parse_alphas)]
+    pub alphas: Budgets,
+    /// --equal-time: slc's error bounds, comma-separated, each its own curve (default:
+    /// slc's default alone).
+    #[arg(long, default_value = "0.0005", value_parser = parse_error_bounds)]
+    pub error_bounds: Budgets,
     /// --equal-time: the converged reference of each scene (EXR, in the order of the
     /// scenes): read if it exists, else rendered and written there. Default: a file in
     /// `--reference-dir` named by scene, size and reference settings.
@@ -213,7 +221,7 @@ impl std::ops::Deref for Counts {
     }
 }
 
-/// Time budgets in ms.
+/// Time budgets in ms (or another list of positive numbers).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Budgets(pub Vec<f64>);
 
@@ -224,23 +232,37 @@ impl std::ops::Deref for Budgets {
     }
 }
 
-/// Parses `100,200,400` into budgets (positive, finite ms; at least one).
-fn parse_budgets(s: &str) -> Result<Budgets, String> {
+/// Parses a comma-separated list of numbers above 0 and at most `max` (at least one), each
+/// called `what` in the error.
+fn parse_positive(s: &str, what: &str, max: f64) -> Result<Budgets, String> {
     let v = s
         .split(',')
         .map(str::trim)
         .filter(|t| !t.is_empty())
         .map(|t| match t.parse::<f64>() {
-            Ok(ms) if ms > 0.0 && ms <= 1e7 => Ok(ms),
-            _ => Err(format!(
-                "{t:?} is not a time budget in ms (above 0, at most 1e7)"
-            )),
+            Ok(x) if x > 0.0 && x <= max => Ok(x),
+            _ => Err(format!("{t:?} is not {what} (above 0, at most {max})")),
         })
         .collect::<Result<Vec<_>, _>>()?;
     if v.is_empty() {
-        return Err("no budget given".into());
+        return Err(format!("no {what} given"));
     }
     Ok(Budgets(v))
+}
+
+/// Parses `100,200,400` into budgets (ms).
+fn parse_budgets(s: &str) -> Result<Budgets, String> {
+    parse_positive(s, "time budget in ms", 1e7)
+}
+
+/// Parses `1.5,2,3` into lgh's alphas.
+fn parse_alphas(s: &str) -> Result<Budgets, String> {
+    parse_positive(s, "alpha", 16.0)
+}
+
+/// Parses `0.0005,0.002` into slc's error bounds.
+fn parse_error_bounds(s: &str) -> Result<Budgets, String> {
+    parse_positive(s, "error bound", 1.0)
 }
 
 /// Parses `5000,10000` into VPL counts (1 to the benchmarks' cap; at least one).
