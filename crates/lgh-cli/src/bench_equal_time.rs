@@ -32,7 +32,7 @@ fn curves(args: &QualityBenchArgs) -> Vec<(String, &'static str, RenderSettings)
             method: LGH,
             ..base.clone()
         };
-        let default = f64::from(s.lgh.alpha) == alpha;
+        let default = s.lgh.alpha == alpha as f32;
         s.lgh.alpha = alpha as f32;
         let name = if default {
             "lgh".into()
@@ -47,7 +47,8 @@ fn curves(args: &QualityBenchArgs) -> Vec<(String, &'static str, RenderSettings)
             error_bound: Some(bound as f32),
             ..base.clone()
         };
-        let default = bound == f64::from(lgh_render::methods::slc::DEFAULT_ERROR_BOUND);
+        // Compared as the f32 the settings hold (0.0005 has no exact binary form).
+        let default = bound as f32 == lgh_render::methods::slc::DEFAULT_ERROR_BOUND;
         let name = if default {
             "slc".into()
         } else {

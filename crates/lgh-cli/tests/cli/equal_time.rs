@@ -122,7 +122,7 @@ fn equal_time_sweeps_both_methods_against_a_cached_reference() {
     );
     for (flag, value, needle) in [
         ("--budgets", "0", "time budget"),
-        ("--budgets", "", "no budget"),
+        ("--budgets", "", "no time budget"),
         ("--sweep", "0", "VPL count"),
     ] {
         assert_error(
