@@ -62,7 +62,8 @@ impl Seen {
         }
     }
 
-    /// True if `self` lies on the surface that pixel `j` shaded, seen from depth `depth`.
+    /// True if `self` lies on the surface of `other` (a pixel's shaded point), within a
+    /// distance from its tangent plane relative to `depth`, the depth of that pixel.
     fn on(&self, other: &Seen, depth: f32) -> bool {
         if self.emits != other.emits {
             return false;
@@ -87,6 +88,11 @@ pub struct EdgeResolve {
     samples: u32,
     /// (pixel, sample counts of its 3 x 3 neighbours, row by row, the pixel at 4).
     edges: Vec<(u32, [u8; 9])>,
+}
+
+/// The depth of pixel `i`, the scale of [`Seen::on`]'s plane test (1 where it sees nothing).
+fn depth(g: &GBuffer, i: usize) -> f32 {
+    if g.is_hit(i) { g.depth[i] } else { 1.0 }
 }
 
 /// The 3 x 3 neighbour `k` (0..9, row by row) of pixel (x, y), if inside the image.
@@ -131,15 +137,12 @@ impl EdgeResolve {
                     }
                     let i = y as usize * w as usize + x as usize;
                     let here = Seen::pixel(g, i);
-                    let depth_of = |j: usize| {
-                        if g.is_hit(j) { g.depth[j] } else { 1.0 }
-                    };
                     let near: [Option<usize>; 9] =
                         std::array::from_fn(|k| neighbour(x, y, k, w, h));
                     let edge = near
                         .iter()
                         .flatten()
-                        .any(|&j| !Seen::pixel(g, j).on(&here, depth_of(i)));
+                        .any(|&j| !Seen::pixel(g, j).on(&here, depth(g, i)));
                     if !edge {
                         return None;
                     }
@@ -198,8 +201,7 @@ impl EdgeResolve {
 /// The neighbour (0..9) whose shaded point lies on the surface `seen`: the pixel itself (4)
 /// if its does, else the nearest that does, else the pixel itself.
 fn best_match(g: &GBuffer, seen: &Seen, near: &[Option<usize>; 9]) -> usize {
-    let depth = |j: usize| if g.is_hit(j) { g.depth[j] } else { 1.0 };
-    let on = |j: usize| seen.on(&Seen::pixel(g, j), depth(j));
+    let on = |j: usize| seen.on(&Seen::pixel(g, j), depth(g, j));
     if near[4].is_some_and(on) {
         return 4;
     }

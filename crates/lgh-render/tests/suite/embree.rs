@@ -11,6 +11,8 @@ use lgh_render::world::accel::{Accel, AccelKind, BuildUse};
 use lgh_render::{RenderSettings, World};
 use lgh_scene::{Mesh, Scene};
 
+use crate::common;
+
 /// How the two backends compared on a set of rays.
 #[derive(Debug, Default)]
 struct Agreement {
