@@ -534,9 +534,17 @@ fn interleaving_keeps_the_image_and_divides_the_work() {
 /// the same image up to the rounding of the sums (the lighting loop sums its lights lane by
 /// lane, and a tile's list decides which lane a light lands in). Tolerance: max_abs below
 /// 1e-4 of the image's mean luminance (a light lost or shaded twice moves a pixel by far more).
+/// The rays go through obvhs: Embree's ray streams (the default ray tracer of an `embree`
+/// build) may decide a grazing shadow ray differently as the tile size regroups the rays
+/// (measured max_abs 1.4e-5 at a mean of 0.015, with the clamp of 5,000 VPLs).
 #[test]
 fn the_tile_size_does_not_change_the_image() {
-    let world = cornell();
+    let mut scene = lgh_scene::cornell::cornell_box();
+    scene
+        .finish(std::path::Path::new("<built-in>"))
+        .expect("the built-in scene is valid");
+    let world = World::with_accel(scene, lgh_render::world::accel::AccelKind::Obvhs)
+        .expect("obvhs is always built");
     let run = |tile: Option<u32>| {
         let s = RenderSettings {
             width: 96,
