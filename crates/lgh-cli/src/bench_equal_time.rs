@@ -11,14 +11,15 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Result, anyhow, bail};
-use lgh_render::accumulate::frame_settings;
 use lgh_render::methods::brute::BRUTE;
 use lgh_render::methods::lgh::LGH;
 use lgh_render::methods::slc::SLC;
 use lgh_render::{Image, RenderSettings, World};
 
 use crate::bench_cmd::open_scene;
-use crate::bench_quality::{Point, QualityBenchArgs, indirect_only, measure, ms, render};
+use crate::bench_quality::{
+    Point, QualityBenchArgs, indirect_only, measure, ms, prefix_means, render,
+};
 use crate::render_cmd::args::Device;
 
 /// The curves of the sweep: (series name, the method it belongs to, settings without the
@@ -238,25 +239,11 @@ fn compute(world: &World, args: &QualityBenchArgs, name: &str) -> Result<(Image,
         u64::from(frames),
         &format!("{name}: reference"),
     );
-    let (w, h) = args.size;
-    let mean = |sum: &[glam::Vec3], n: u32| {
-        let inv = 1.0 / n.max(1) as f32;
-        Image::from_pixels(w, h, sum.iter().map(|p| *p * inv).collect())
-    };
-    let mut sum = vec![glam::Vec3::ZERO; w as usize * h as usize];
-    let mut half = None;
-    for k in 0..frames {
-        let f = render(world, &frame_settings(&base, k, frames))?;
-        for (s, p) in sum.iter_mut().zip(&f.indirect.pixels) {
-            *s += *p;
-        }
-        if k + 1 == frames / 2 {
-            half = Some(mean(&sum, k + 1));
-        }
-        bar.inc(1);
-    }
+    let mut means = prefix_means(world, &base, frames, &[frames / 2, frames], || bar.inc(1))?;
     bar.finish_and_clear();
-    let whole = mean(&sum, frames);
+    let whole = means.pop().map(|(_, m)| m);
+    let half = means.pop().map(|(_, m)| m);
+    let whole = whole.ok_or_else(|| anyhow!("no reference frame rendered"))?;
     Ok((half.unwrap_or_else(|| whole.clone()), whole))
 }
 

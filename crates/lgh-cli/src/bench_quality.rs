@@ -232,18 +232,31 @@ impl std::ops::Deref for Budgets {
     }
 }
 
+/// Parses a comma-separated list (empty items skipped; it may be empty) whose items all
+/// pass `ok`; an item that does not is refused as "{item:?} is not {what}".
+fn parse_list<T: std::str::FromStr>(
+    s: &str,
+    ok: impl Fn(&T) -> bool,
+    what: &str,
+) -> Result<Vec<T>, String> {
+    s.split(',')
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+        .map(|t| match t.parse::<T>() {
+            Ok(x) if ok(&x) => Ok(x),
+            _ => Err(format!("{t:?} is not {what}")),
+        })
+        .collect()
+}
+
 /// Parses a comma-separated list of numbers above 0 and at most `max` (at least one), each
 /// called `what` in the error.
 fn parse_positive(s: &str, what: &str, max: f64) -> Result<Budgets, String> {
-    let v = s
-        .split(',')
-        .map(str::trim)
-        .filter(|t| !t.is_empty())
-        .map(|t| match t.parse::<f64>() {
-            Ok(x) if x > 0.0 && x <= max => Ok(x),
-            _ => Err(format!("{t:?} is not {what} (above 0, at most {max})")),
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let v = parse_list(
+        s,
+        |&x: &f64| x > 0.0 && x <= max,
+        &format!("{what} (above 0, at most {max})"),
+    )?;
     if v.is_empty() {
         return Err(format!("no {what} given"));
     }
@@ -268,15 +281,11 @@ fn parse_error_bounds(s: &str) -> Result<Budgets, String> {
 /// Parses `5000,10000` into VPL counts (1 to the benchmarks' cap; at least one).
 fn parse_vpl_counts(s: &str) -> Result<Counts, String> {
     let max = crate::caps::MAX_BENCH_VPLS;
-    let v = s
-        .split(',')
-        .map(str::trim)
-        .filter(|t| !t.is_empty())
-        .map(|t| match t.parse::<u32>() {
-            Ok(n) if n >= 1 && u64::from(n) <= max => Ok(n),
-            _ => Err(format!("{t:?} is not a VPL count from 1 to {max}")),
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let v = parse_list(
+        s,
+        |&n: &u32| n >= 1 && u64::from(n) <= max,
+        &format!("a VPL count from 1 to {max}"),
+    )?;
     if v.is_empty() {
         return Err("no VPL count given".into());
     }
@@ -285,15 +294,42 @@ fn parse_vpl_counts(s: &str) -> Result<Counts, String> {
 
 /// Parses `1,2,4` (or nothing) into frame counts of 1 to 65536.
 fn parse_counts(s: &str) -> Result<Counts, String> {
-    s.split(',')
-        .map(str::trim)
-        .filter(|t| !t.is_empty())
-        .map(|t| match t.parse::<u32>() {
-            Ok(n) if (1..=65536).contains(&n) => Ok(n),
-            _ => Err(format!("{t:?} is not a frame count from 1 to 65536")),
-        })
-        .collect::<Result<Vec<_>, _>>()
-        .map(Counts)
+    parse_list(
+        s,
+        |n: &u32| (1..=65536).contains(n),
+        "a frame count from 1 to 65536",
+    )
+    .map(Counts)
+}
+
+/// The means of the first n of `frames` frames of `s` ([`frame_settings`]: each its own VPLs
+/// and sub-pixel position) for each n of `at`, in frame order, as (n, indirect light);
+/// `each` runs after every frame.
+///
+/// # Errors
+/// A frame fails to render.
+pub fn prefix_means(
+    world: &World,
+    s: &RenderSettings,
+    frames: u32,
+    at: &[u32],
+    each: impl Fn(),
+) -> Result<Vec<(u32, Image)>> {
+    let mut sum = vec![glam::Vec3::ZERO; s.width as usize * s.height as usize];
+    let mut out = Vec::new();
+    for k in 0..frames {
+        let f = render(world, &frame_settings(s, k, frames))?;
+        for (acc, p) in sum.iter_mut().zip(&f.indirect.pixels) {
+            *acc += *p;
+        }
+        if at.contains(&(k + 1)) {
+            let inv = 1.0 / (k + 1) as f32;
+            let mean = sum.iter().map(|p| *p * inv).collect();
+            out.push((k + 1, Image::from_pixels(s.width, s.height, mean)));
+        }
+        each();
+    }
+    Ok(out)
 }
 
 /// The accumulation curve of one scene: lgh --accumulate N against brute --accumulate N.
@@ -313,22 +349,7 @@ fn accumulation(
     };
     // Brute-force frames do not depend on the frame count: the prefix means are the
     // accumulated references.
-    let mut sums: Vec<glam::Vec3> = Vec::new();
-    let mut references = Vec::new();
-    for k in 0..max_n {
-        let f = render(world, &frame_settings(&brute, k, max_n))?;
-        if sums.is_empty() {
-            sums = vec![glam::Vec3::ZERO; f.indirect.pixels.len()];
-        }
-        for (s, p) in sums.iter_mut().zip(&f.indirect.pixels) {
-            *s += *p;
-        }
-        if args.accumulate.contains(&(k + 1)) {
-            let inv = 1.0 / (k + 1) as f32;
-            let mean = sums.iter().map(|p| *p * inv).collect();
-            references.push((k + 1, Image::from_pixels(base.width, base.height, mean)));
-        }
-    }
+    let references = prefix_means(world, &brute, max_n, &args.accumulate, || {})?;
     let mut out = Vec::new();
     for (n, reference) in references {
         let lgh = RenderSettings {

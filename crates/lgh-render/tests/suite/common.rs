@@ -115,13 +115,18 @@ pub fn mean_std(xs: &[f64]) -> (f64, f64) {
     (m, v.sqrt())
 }
 
-/// The built-in Cornell box, finished and prepared.
-pub fn cornell_world() -> lgh_render::World {
+/// The built-in Cornell box, finished.
+pub fn cornell_scene() -> lgh_scene::Scene {
     let mut scene = lgh_scene::cornell::cornell_box();
     scene
         .finish(std::path::Path::new("<built-in>"))
         .expect("the built-in scene is valid");
-    lgh_render::World::new(scene)
+    scene
+}
+
+/// The built-in Cornell box, finished and prepared.
+pub fn cornell_world() -> lgh_render::World {
+    lgh_render::World::new(cornell_scene())
 }
 
 /// A scene of the project's `scenes/` folder (`rel` from there), loaded and finished.

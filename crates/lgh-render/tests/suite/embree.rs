@@ -97,10 +97,7 @@ fn assert_agree(name: &str, mesh: &Mesh, n: usize) {
 }
 
 fn cornell() -> Scene {
-    let mut s = lgh_scene::cornell::cornell_box();
-    s.finish(std::path::Path::new("<built-in cornell>"))
-        .expect("cornell");
-    s
+    common::cornell_scene()
 }
 
 #[test]

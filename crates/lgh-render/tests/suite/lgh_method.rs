@@ -539,12 +539,11 @@ fn interleaving_keeps_the_image_and_divides_the_work() {
 /// (measured max_abs 1.4e-5 at a mean of 0.015, with the clamp of 5,000 VPLs).
 #[test]
 fn the_tile_size_does_not_change_the_image() {
-    let mut scene = lgh_scene::cornell::cornell_box();
-    scene
-        .finish(std::path::Path::new("<built-in>"))
-        .expect("the built-in scene is valid");
-    let world = World::with_accel(scene, lgh_render::world::accel::AccelKind::Obvhs)
-        .expect("obvhs is always built");
+    let world = World::with_accel(
+        common::cornell_scene(),
+        lgh_render::world::accel::AccelKind::Obvhs,
+    )
+    .expect("obvhs is always built");
     let run = |tile: Option<u32>| {
         let s = RenderSettings {
             width: 96,
