@@ -52,6 +52,20 @@ impl LevelRole {
             Self::Lowest | Self::Middle => 2.0 * r,
         }
     }
+
+    /// The floors (rising, falling) under the two ramps of B_l: B_l(d) = min(max(clamp(2t -
+    /// 1, 0, 1), rising), max(clamp(2 - t, 0, 1), falling)), t = d / r. A floor of 1 turns
+    /// its ramp off (the lowest level does not rise, the top does not fall). The form of
+    /// [`blend`] without a branch on the role, as the batched and GPU loops evaluate it.
+    #[must_use]
+    pub fn floors(self) -> (f32, f32) {
+        match self {
+            Self::Only => (1.0, 1.0),
+            Self::Lowest => (1.0, 0.0),
+            Self::Middle => (0.0, 0.0),
+            Self::Top => (0.0, 1.0),
+        }
+    }
 }
 
 /// B_l(d) for a level of radius `r` = r_l and the given role.

@@ -127,6 +127,18 @@ impl GpuContext {
             }))
     }
 
+    /// A uniform buffer holding `value`.
+    #[must_use]
+    pub fn uniform<T: bytemuck::Pod>(&self, label: &str, value: &T) -> wgpu::Buffer {
+        use wgpu::util::DeviceExt;
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytemuck::bytes_of(value),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            })
+    }
+
     /// The bind group of `pipeline`'s group 0 with `buffers` at bindings 0, 1, ...
     #[must_use]
     pub fn bind_group(

@@ -5,7 +5,10 @@
 //! queue), the scene uploaded with a BVH built on the CPU ([`GpuScene`]: obvhs's binary BVH,
 //! flattened, traversed in compute: no ray-tracing hardware is needed), and the brute-force
 //! reference ([`brute::BRUTE_GPU`], [`brute::BRUTE_UNSHADOWED_GPU`]), which checks the GPU's
-//! rays and shading against the CPU's. The other passes of the LGH frame run on the CPU.
+//! rays and shading against the CPU's, and `lgh` with its lighting loop, shadow-sample
+//! selection, unbiased shadow targets and shadow rays on the GPU ([`lgh::LGH_GPU`]). The
+//! other passes of the LGH frame (G-buffer, VPLs, hierarchy build, tile binning, filters)
+//! run on the CPU.
 //!
 //! The GPU methods are [`lgh_render::Method`]s like the CPU's: `render_frame` runs them with
 //! the same settings and gives the same `Frame`. Results are deterministic: every pixel sums
@@ -15,6 +18,7 @@ mod context;
 pub mod scene;
 
 pub mod brute;
+pub mod lgh;
 pub mod rays;
 
 pub use context::{GpuContext, GpuError};
@@ -26,6 +30,8 @@ pub fn gpu_method(method: lgh_render::Method) -> Option<lgh_render::Method> {
     match method.name() {
         "brute" => Some(brute::BRUTE_GPU),
         "brute-unshadowed" => Some(brute::BRUTE_UNSHADOWED_GPU),
+        "lgh" => Some(lgh::LGH_GPU),
+        "lgh-unshadowed" => Some(lgh::LGH_UNSHADOWED_GPU),
         _ => None,
     }
 }

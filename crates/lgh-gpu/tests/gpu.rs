@@ -4,19 +4,31 @@
 
 use lgh_render::image::metrics::diff;
 use lgh_render::methods::brute::{BRUTE, BRUTE_UNSHADOWED};
-use lgh_render::{Component, RenderSettings, Silent, World, render_frame};
+use lgh_render::{Component, RenderSettings, Silent, render_frame};
+
+mod common;
+use common::{SCENES, world};
 
 #[test]
 fn every_shader_is_valid_wgsl() {
-    let source = lgh_gpu::brute::source();
-    let module = naga::front::wgsl::parse_str(&source)
-        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+    for source in [
+        lgh_gpu::brute::source(),
+        lgh_gpu::rays::source(),
+        lgh_gpu::lgh::source(),
+    ] {
+        validate(&source);
+    }
+}
+
+fn validate(source: &str) {
+    let module = naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
     naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
         naga::valid::Capabilities::default(),
     )
     .validate(&module)
-    .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+    .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
 }
 
 #[test]
@@ -29,32 +41,6 @@ fn the_bvh_flattens_with_every_triangle() {
     let (nodes, tris) = lgh_gpu::scene::flatten(&scene.mesh).expect("flattens");
     assert_eq!(tris.len(), 3 * scene.mesh.len());
     assert!(!nodes.is_empty());
-}
-
-/// The default scene (None) and the project's three test scenes.
-const SCENES: [Option<&str>; 4] = [
-    None,
-    Some("test/two-rooms.toml"),
-    Some("test/colonnade.toml"),
-    Some("test/clutter.toml"),
-];
-
-fn world(rel: Option<&str>) -> World {
-    let scene = match rel {
-        None => {
-            let mut s = lgh_scene::cornell::cornell_box();
-            s.finish(std::path::Path::new("<built-in cornell>"))
-                .expect("scene");
-            s
-        }
-        Some(r) => {
-            let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("../../scenes")
-                .join(r);
-            lgh_scene::load(&p).expect("scene")
-        }
-    };
-    World::new(scene)
 }
 
 /// GPU `brute` equals CPU `brute` over the same VPLs within rel_rmse 0.002 (and

@@ -79,6 +79,14 @@ impl Descent {
         Self { start, child }
     }
 
+    /// The tables as they are stored, for a backend that walks them elsewhere (the GPU):
+    /// light j's children are `children[starts[j]..starts[j + 1]]`, each (grid index,
+    /// running sum of the weights).
+    #[must_use]
+    pub fn tables(&self) -> (&[u32], &[(u32, f32)]) {
+        (&self.start, &self.child)
+    }
+
     /// A child of light `j` drawn with probability proportional to its weight, by the
     /// uniform number `u` in [0, 1); `None` for a light without children (S_1).
     #[inline]

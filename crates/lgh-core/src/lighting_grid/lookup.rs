@@ -59,21 +59,31 @@ impl VertexRows {
                     }
                     return LevelTable::Dense(table);
                 }
-                let mut start = vec![0u32; side * side + 1];
-                for v in &grid.vertex[range.clone()] {
-                    start[v.z as usize * side + v.y as usize + 1] += 1;
-                }
-                // Prefix sums: row k is then start[k]..start[k + 1].
-                let mut at = range.start as u32;
-                for s in &mut start {
-                    at += *s;
-                    *s = at;
-                }
-                LevelTable::Rows(start)
+                LevelTable::Rows(row_starts(grid, l))
             })
             .collect();
         Self { rows }
     }
+}
+
+/// Where each vertex row (y, z) of level `l` >= 1 of `grid` starts among the level's
+/// lights, which are in (z, y, x) order: `(r + 1)^2 + 1` absolute light indices for r cells
+/// per axis; row (y, z) holds the lights `starts[z (r + 1) + y]..starts[z (r + 1) + y + 1]`.
+#[must_use]
+pub fn row_starts(grid: &LightingGrid, l: u32) -> Vec<u32> {
+    let side = grid.geometry.cells_per_axis(l) as usize + 1;
+    let range = grid.level_range(l);
+    let mut start = vec![0u32; side * side + 1];
+    for v in &grid.vertex[range.clone()] {
+        start[v.z as usize * side + v.y as usize + 1] += 1;
+    }
+    // Prefix sums: row k is then start[k]..start[k + 1].
+    let mut at = range.start as u32;
+    for s in &mut start {
+        at += *s;
+        *s = at;
+    }
+    start
 }
 
 impl<'a> VertexLookup<'a> {

@@ -274,12 +274,7 @@ impl Partition {
                     }
                 }
             }
-            let (rise_off, fall_off) = match role {
-                LevelRole::Only => (1.0, 1.0),
-                LevelRole::Lowest => (1.0, 0.0),
-                LevelRole::Middle => (0.0, 0.0),
-                LevelRole::Top => (0.0, 1.0),
-            };
+            let (rise_off, fall_off) = role.floors();
             let mut b = [0.0f32; 8];
             for k in 0..8 {
                 let (dx, dy, dz) = (q[0][k] - x.x, q[1][k] - x.y, q[2][k] - x.z);

@@ -465,6 +465,49 @@ impl InterleavedBins {
     }
 }
 
+/// Interleaved tile bins as one light list per (sub-image, tile), for a backend that reads
+/// them elsewhere (the GPU): pixel p shades `lights[offsets[list[p]]..offsets[list[p] + 1]]`,
+/// global light indices in ascending order.
+#[derive(Clone, Debug, Default)]
+pub struct FlatBins {
+    /// The list of each pixel (row by row).
+    pub list: Vec<u32>,
+    /// `lists + 1` starts into `lights`.
+    pub offsets: Vec<u32>,
+    /// Global light indices.
+    pub lights: Vec<u32>,
+}
+
+impl InterleavedBins {
+    /// The bins as [`FlatBins`] for the pixels of a `width` x `height` image.
+    #[must_use]
+    pub fn flatten(&self, width: u32, height: u32) -> FlatBins {
+        let mut base = Vec::with_capacity(self.bins.len());
+        let mut offsets = vec![0u32];
+        let mut lights = Vec::new();
+        for (bins, members) in self.bins.iter().zip(&self.members) {
+            base.push(offsets.len() as u32 - 1);
+            for t in bins.offsets.windows(2) {
+                let local = &bins.lights[t[0] as usize..t[1] as usize];
+                lights.extend(local.iter().map(|&l| members[l as usize]));
+                offsets.push(lights.len() as u32);
+            }
+        }
+        let list = (0..width * height)
+            .into_par_iter()
+            .map(|p| {
+                let (s, t) = self.tile_key(p % width, p / width);
+                base[s] + t as u32
+            })
+            .collect();
+        FlatBins {
+            list,
+            offsets,
+            lights,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

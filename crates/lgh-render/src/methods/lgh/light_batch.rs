@@ -165,12 +165,7 @@ impl LightBatch {
             iso[e] = pl.iso;
             inv_radius[e] = pl.radius.recip();
             reach2[e] = pl.reach2;
-            (rise_off[e], fall_off[e]) = match pl.role {
-                LevelRole::Only => (1.0, 1.0),
-                LevelRole::Lowest => (1.0, 0.0),
-                LevelRole::Middle => (0.0, 0.0),
-                LevelRole::Top => (0.0, 1.0),
-            };
+            (rise_off[e], fall_off[e]) = pl.role.floors();
             level[e] = pl.level;
         }
     }

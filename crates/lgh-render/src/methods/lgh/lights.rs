@@ -16,6 +16,7 @@ use lgh_core::vpl::{GridEmission, Vpls, light_irradiance};
 use rayon::prelude::*;
 
 use crate::methods::lgh::light_batch::PackedLight;
+use crate::methods::lgh::tables::GridTables;
 use crate::passes::gbuffer::GBuffer;
 use crate::shading::reservoirs::{ShadowReservoirs, ShadowSample};
 use crate::shading::shadow_pass::Targets;
@@ -58,21 +59,23 @@ pub(super) struct ShadeLights {
     /// empty otherwise).
     reps: Vec<RepSet>,
     /// What the unbiased estimate needs of each hierarchy (empty for the paper's).
-    hierarchies: Vec<Hierarchy>,
+    pub(super) hierarchies: Vec<Hierarchy>,
 }
 
 /// One hierarchy as the unbiased estimate reads it (docs/design.md, "Unbiased estimate"):
 /// its centroids by vertex for Lambda_i, the children of its lights for the draw of an S_1
 /// light, and the S_1 lights' representatives (with their VPLs' colours).
-struct Hierarchy {
+pub(super) struct Hierarchy {
     /// The representatives of its S_1 lights (by grid index).
-    reps: Vec<RepSet>,
+    pub(super) reps: Vec<RepSet>,
     partition: Partition,
-    descent: Descent,
+    pub(super) descent: Descent,
     /// Index in [`ShadeLights`] of the hierarchy's first light.
-    first: usize,
+    pub(super) first: usize,
     /// Index in [`ShadeLights`] of its grid light 0 (after the VPLs if they are shaded).
-    grid_base: usize,
+    pub(super) grid_base: usize,
+    /// Its lookup tables as flat arrays, when the frame is prepared for another backend.
+    pub(super) tables: Option<GridTables>,
 }
 
 /// The [`SLOTS`] representative VPLs of one light, structure of arrays (positions, normals
@@ -83,7 +86,7 @@ struct Hierarchy {
 /// for each such read, and those lines sit next to the ones the weights have just read.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(align(64))]
-struct RepSet {
+pub(super) struct RepSet {
     position: [[f32; SLOTS]; 3],
     normal: [[f32; SLOTS]; 3],
     colour: [[f32; SLOTS]; 3],
@@ -91,7 +94,7 @@ struct RepSet {
 
 impl RepSet {
     /// Slot `s`: position and normal.
-    fn get(&self, s: usize) -> (Vec3, Vec3) {
+    pub(super) fn get(&self, s: usize) -> (Vec3, Vec3) {
         let [px, py, pz] = self.position;
         let [nx, ny, nz] = self.normal;
         (
@@ -101,7 +104,7 @@ impl RepSet {
     }
 
     /// The flux colour of slot `s`.
-    fn colour(&self, s: usize) -> Vec3 {
+    pub(super) fn colour(&self, s: usize) -> Vec3 {
         let [r, g, b] = &self.colour;
         Vec3::new(r[s], g[s], b[s])
     }
@@ -249,6 +252,7 @@ impl ShadeLights {
         levels: ShadedLevels,
         seed: u64,
         first: usize,
+        tables: bool,
     ) {
         // S_1 only: the draw below a coarser light is made afresh per sample.
         let reps = s1_representatives(grid, &vpls.as_input(), seed, |s| RepSet::of(s, vpls));
@@ -260,6 +264,7 @@ impl ShadeLights {
             descent: Descent::new(VertexLookup::new(grid, &rows)),
             first,
             grid_base: first + vpl_lights,
+            tables: tables.then(|| GridTables::new(grid, levels)),
         });
     }
 

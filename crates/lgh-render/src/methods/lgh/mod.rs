@@ -44,43 +44,28 @@
 //! | `mod.rs` | the method: the passes above in order |
 //! | [`settings`] | [`LghSettings`] and the choices where the paper is silent |
 //! | `lights.rs` | the shaded lights (levels, radii, roles, representatives) |
+//! | `prepared.rs` | a frame's steps: [`LghFrame::prepare`], the CPU lighting loop, [`LghFrame::finish`] |
 //! | `shade.rs` | the lighting loop of one row (A and the shadow reservoirs) |
+//! | [`tables`] | the lighting loop's inputs as flat tables, for another backend (the GPU) |
 //! | [`light_batch`] | a tile's lights in lanes of eight for the lighting loop |
-
-use std::sync::Arc;
-use std::time::Instant;
-
-use glam::Vec3;
-use lgh_core::lighting_grid::GridError;
-use lgh_core::lighting_grid::partition::ShadedLevels;
-use lgh_core::rng::Rng;
-use lgh_core::timing::Timings;
-use lgh_core::vpl::Vpls;
-use rayon::prelude::*;
 
 use crate::memory::FrameMemory;
 use crate::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
-use crate::passes::par_filled;
 use crate::settings::RenderError;
-use crate::shading::ratio::{RATIO_CORRECTION, RATIO_VISIBILITY, RatioFilter, shadowed_indirect};
-use crate::shading::reservoirs::ReservoirLayout;
-use crate::shading::shadow_pass::{ShadowPass, Targets};
-use crate::shading::tiles::{AllBounds, InterleavedBins};
+use lgh_core::lighting_grid::GridError;
 
 pub mod light_batch;
 mod lights;
+mod prepared;
 pub mod settings;
 mod shade;
+pub mod tables;
 
-use lights::{LghTargets, ShadeLights, split_by_normal};
+pub use prepared::{LghFrame, LoopResult, Prepared};
 pub use settings::{
     DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, INTERACTIVE_INTERLEAVE, JitterAt,
     LghSettings, ShadowTarget, auto_tile,
 };
-use shade::{RowContext, RowScratch, shade_rows};
-
-/// Random-stream tag of the grid offset of `--grid-jitter`.
-const STREAM_GRID_SHIFT: u64 = 0x6a1d;
 
 /// The lighting grid hierarchy with stochastic ray-traced shadows.
 pub const LGH: Method = Method::new(&Lgh { shadowed: true });
@@ -148,6 +133,11 @@ pub struct LghStats {
 /// `shadowed == false` (method `lgh-unshadowed`) no sample is selected and no ray traced.
 /// The statistics are an [`LghStats`].
 ///
+/// The frame's three steps are public, so that another backend can run the middle one:
+/// [`LghFrame::prepare`] (hierarchies, shaded lights, tile bins), the lighting loop with
+/// its shadow rays ([`LghFrame::shade`] here on the CPU; lgh-gpu's on the GPU from
+/// [`LghFrame::tables`]), and [`LghFrame::finish`] (ratio estimator and filters).
+///
 /// # Errors
 /// The VPLs cannot form a hierarchy (non-finite values).
 pub fn render_lgh(
@@ -155,172 +145,11 @@ pub fn render_lgh(
     shadowed: bool,
     memory: &mut FrameMemory,
 ) -> Result<MethodOutput, GridError> {
-    let MethodInputs {
-        world,
-        gbuffer: g,
-        camera: frame,
-        vpls,
-        settings: all,
-        ..
-    } = *inputs;
-    let (settings, seed) = (&all.lgh, all.seed);
-    let builder = &mut memory.grid;
-    builder.set_shift(settings.grid_jitter.then(|| {
-        let mut rng = Rng::new(&[seed, STREAM_GRID_SHIFT]);
-        Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())
-    }));
-    let mut t = Timings::default();
-    let n_px = g.len();
-    let k = all.shadows.k(shadowed, DEFAULT_SHADOW_SAMPLES);
-    let n = all.tiling.interleave.unwrap_or(DEFAULT_INTERLEAVE).max(1);
-    let mut stats = LghStats {
-        alpha: settings.alpha,
-        shadow_samples: k as u32,
-        interleave: n,
-        ..LghStats::default()
-    };
-    if vpls.is_empty() {
-        return Ok(MethodOutput {
-            radiance: par_filled(n_px, Vec3::ZERO),
-            lights_per_pixel: Some(par_filled(n_px, 0)),
-            stats: Some(Arc::new(stats)),
-            ..MethodOutput::default()
-        });
-    }
-    // One hierarchy, or one per dominant normal direction (--normal-bins).
-    let split;
-    let groups: Vec<&Vpls> = if settings.normal_bins {
-        split = split_by_normal(vpls);
-        split.iter().collect()
-    } else {
-        vec![vpls]
-    };
-    let lowest = settings.start_level.min(1);
-    let unbiased = settings.estimator == Estimator::Unbiased;
-    let n2 = (n * n) as usize;
-    let scale = n2 as f32;
-    let mut lights = ShadeLights::default();
-    let mut build_ms = 0.0;
-    let mut lighting_ms = 0.0;
-    let mut reps_ms = 0.0;
-    for group in groups.iter().filter(|g| !g.is_empty()) {
-        let input = group.as_input();
-        let start = Instant::now();
-        builder.build(&input, settings.levels, settings.construction)?;
-        build_ms += start.elapsed().as_secs_f64() * 1e3;
-        let Some(grid) = builder.grid() else { continue };
-        let start = Instant::now();
-        stats.grid_lights += grid.len();
-        stats.levels = stats.levels.max(grid.l_max());
-        let first = lights.position.len();
-        lights.add_hierarchy(grid, group, lowest, settings.alpha, settings.emission, n2);
-        lighting_ms += start.elapsed().as_secs_f64() * 1e3;
-        if k > 0 && settings.shadow_target == ShadowTarget::Representative {
-            let start = Instant::now();
-            if unbiased {
-                let levels = ShadedLevels {
-                    lowest,
-                    alpha: settings.alpha,
-                };
-                lights.add_unbiased(grid, group, levels, seed, first);
-            } else {
-                lights.add_representatives(
-                    grid,
-                    group,
-                    lowest,
-                    settings.shadow_from_level,
-                    settings.construction,
-                    seed,
-                );
-            }
-            reps_ms += start.elapsed().as_secs_f64() * 1e3;
+    match LghFrame::prepare(inputs, shadowed, memory, false)? {
+        Prepared::Dark(output) => Ok(output),
+        Prepared::Frame(frame) => {
+            let shaded = frame.shade(inputs);
+            Ok(frame.finish(inputs, shaded, memory))
         }
     }
-    t.push("lgh_build", build_ms);
-    if reps_ms > 0.0 {
-        t.push("representatives", reps_ms);
-    }
-    let lighting_start = Instant::now();
-    stats.shaded_lights = lights.position.len();
-    if let Some(level) = settings.only_level {
-        lights.show_only_level(level);
-    }
-    let tile = all.tiling.tile.unwrap_or_else(|| auto_tile(n)).max(1);
-    let bounds = memory
-        .tile_bounds
-        .get_or_insert_with(g, [n, tile, 0, 0], || AllBounds::new(g, n, tile * n));
-    let bins = InterleavedBins::from_bounds(
-        g,
-        frame,
-        bounds,
-        &lights.position,
-        &lights.reach,
-        &lights.sub,
-    );
-    let eps2 = inputs.eps() * inputs.eps();
-    let representative = settings.shadow_target == ShadowTarget::Representative;
-    let packed = lights.packed(scale);
-    // Per pixel: A and overdraw; and k reservoirs.
-    let mut shaded: Vec<(Vec3, u32)> = par_filled(n_px, (Vec3::ZERO, 0));
-    let layout = ReservoirLayout::new(k);
-    let ctx = RowContext {
-        g,
-        bins: &bins,
-        packed: &packed,
-        lights: &lights,
-        settings,
-        layout,
-        k,
-        representative,
-        eps2,
-        seed,
-        phases: n as usize,
-    };
-    let targets = LghTargets {
-        lights: &lights,
-        g,
-        seed,
-        eps2,
-    };
-    // One row of tiles per call, so that a tile's light batch serves all its rows.
-    let pass = ShadowPass::new(world, g, k, seed).with_group_rows(bins.tile_pixels() as usize);
-    let (estimates, times) = pass.shade_in_bands(
-        &mut shaded,
-        RowScratch::default,
-        |scratch, y0, rows, res| shade_rows(&ctx, y0, rows, res, scratch),
-        (representative && settings.jitter == JitterAt::Ray).then_some(&targets as &dyn Targets),
-    );
-    let overdraw: Vec<u32> = shaded.par_iter().map(|p| p.1).collect();
-    stats.avg_overdraw = g.mean_over_hits(&overdraw);
-    t.push(
-        "lighting",
-        lighting_ms
-            + (lighting_start.elapsed().as_secs_f64() * 1e3 - times.resolve_ms - times.rays_ms),
-    );
-    if times.resolve_ms > 0.0 {
-        t.push("shadow_targets", times.resolve_ms);
-    }
-    if k > 0 {
-        t.push("shadow_rays", times.rays_ms);
-    }
-    let a: Vec<Vec3> = shaded.par_iter().map(|p| p.0).collect();
-    let filter = RatioFilter {
-        max_ratio: if unbiased {
-            RATIO_CORRECTION
-        } else {
-            RATIO_VISIBILITY
-        },
-        ..all.ratio_filter(n)
-    };
-    let shadowed = shadowed_indirect(world, g, a, estimates, &filter, &mut t, memory);
-    stats.shadow_rays = shadowed.rays;
-    Ok(MethodOutput {
-        radiance: shadowed.indirect,
-        unshadowed: Some(shadowed.unshadowed),
-        shadow_ratio: Some(shadowed.ratio),
-        lights_per_pixel: Some(overdraw),
-        shadow_rays: shadowed.rays,
-        timings: t,
-        stats: Some(Arc::new(stats)),
-    })
 }

@@ -1,0 +1,199 @@
+//! `lgh` with its lighting loop on the GPU (`shaders/lgh.wgsl`; Lin & Yuksel 2019 sections
+//! 3.2, 3.3 and Appendix A): per pixel the unshadowed sum A over its tile's lights, k shadow
+//! samples by stratified selection, the unbiased estimate's targets (the walk to an S_1
+//! light, a representative VPL by contribution) and one shadow ray each through the uploaded
+//! BVH, giving S and U.
+//!
+//! This milestone runs the steps around the loop on the CPU, as the CPU method does
+//! ([`LghFrame::prepare`]: VPLs, hierarchies, tile binning; [`LghFrame::finish`]: the
+//! interleaving blur, the ratio estimator and its a-trous filter) and uploads the loop's
+//! inputs as flat tables ([`LghFrame::tables`]). It runs lgh's default estimate (unbiased,
+//! representative targets drawn at the ray, stratified selection); other settings are
+//! refused with a clear error.
+
+use std::time::Instant;
+
+use glam::{Vec3, Vec4};
+use lgh_render::memory::FrameMemory;
+use lgh_render::methods::lgh::settings::Selection;
+use lgh_render::methods::lgh::tables::LghTables;
+use lgh_render::methods::lgh::{
+    DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt, LghFrame, LoopResult, Prepared, ShadowTarget,
+};
+use lgh_render::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
+use lgh_render::settings::RenderError;
+use lgh_render::shading::shadow_pass::ShadowEstimates;
+
+use crate::context::{GpuContext, GpuError};
+use crate::scene::GpuScene;
+
+mod upload;
+
+use upload::{Params, Tables};
+
+/// The lighting grid hierarchy with its lighting loop and shadow rays on the GPU.
+pub const LGH_GPU: Method = Method::new(&GpuLgh { shadowed: true });
+/// The lighting grid hierarchy without shadows, its lighting loop on the GPU.
+pub const LGH_UNSHADOWED_GPU: Method = Method::new(&GpuLgh { shadowed: false });
+
+struct GpuLgh {
+    shadowed: bool,
+}
+
+impl IndirectMethod for GpuLgh {
+    fn name(&self) -> &'static str {
+        if self.shadowed {
+            "lgh"
+        } else {
+            "lgh-unshadowed"
+        }
+    }
+
+    fn about(&self) -> &'static str {
+        "Lighting grid hierarchy, its lighting loop and shadow rays on the GPU"
+    }
+
+    fn default_shadow_samples(&self) -> u32 {
+        DEFAULT_SHADOW_SAMPLES
+    }
+
+    fn render(
+        &self,
+        inputs: &MethodInputs,
+        memory: &mut FrameMemory,
+    ) -> Result<MethodOutput, RenderError> {
+        let k = inputs
+            .settings
+            .shadows
+            .k(self.shadowed, DEFAULT_SHADOW_SAMPLES);
+        if k > 0 {
+            supported(inputs)?;
+        }
+        let prepared = LghFrame::prepare(inputs, self.shadowed, memory, true)
+            .map_err(|e| RenderError::Backend(e.to_string()))?;
+        let frame = match prepared {
+            Prepared::Dark(output) => return Ok(output),
+            Prepared::Frame(frame) => frame,
+        };
+        let g = inputs.gbuffer;
+        let tables = frame.tables(g.width, g.height).ok_or_else(|| {
+            RenderError::Backend("lgh on the GPU: the hierarchies' tables are missing".into())
+        })?;
+        let fail = |e: GpuError| RenderError::Backend(e.to_string());
+        let ctx = GpuContext::shared().map_err(fail)?;
+        let shaded = lighting_loop(ctx, inputs, &tables).map_err(fail)?;
+        Ok(frame.finish(inputs, shaded, memory))
+    }
+}
+
+/// Refuses the settings whose shadow estimate the GPU loop does not run yet (it runs the
+/// default: the unbiased estimate, representative targets drawn at the ray, stratified
+/// selection).
+fn supported(inputs: &MethodInputs) -> Result<(), RenderError> {
+    let s = &inputs.settings.lgh;
+    let refuse = |what: &str| {
+        Err(RenderError::Backend(format!(
+            "lgh on the GPU runs the default shadow estimate only; {what} needs --device cpu"
+        )))
+    };
+    if s.estimator != Estimator::Unbiased {
+        return refuse("the paper's estimator");
+    }
+    if s.shadow_target != ShadowTarget::Representative {
+        return refuse("--shadow-target centroid");
+    }
+    if s.jitter != JitterAt::Ray {
+        return refuse("jitter at candidate time");
+    }
+    if s.selection != Selection::Stratified {
+        return refuse("streaming selection");
+    }
+    Ok(())
+}
+
+/// The WGSL source of the kernel (with the BVH traversal).
+#[must_use]
+pub fn source() -> String {
+    [
+        include_str!("../shaders/lgh.wgsl"),
+        include_str!("../shaders/bvh.wgsl"),
+    ]
+    .concat()
+}
+
+/// The lighting loop of the frame whose inputs are `tables`, on the GPU: A, the overdraw, S
+/// and U of every pixel, with the loop's time ("lighting": upload, loop, shadow rays and
+/// read-back, as the GPU has them in one pass).
+fn lighting_loop(
+    ctx: &GpuContext,
+    inputs: &MethodInputs,
+    tables: &LghTables,
+) -> Result<LoopResult, GpuError> {
+    let start = Instant::now();
+    let g = inputs.gbuffer;
+    let n = g.len();
+    let scene = GpuScene::new(ctx, &inputs.world.scene.mesh)?;
+    let packed = Tables::new(g, tables)?;
+    let params = Params::new(inputs, tables, &packed)?;
+    let buffers = [
+        ctx.uniform("lgh params", &params),
+        ctx.storage("g-buffer", &packed.pixels)?,
+        ctx.storage("lights", &packed.lights)?,
+        ctx.storage("light lists", &packed.lists)?,
+        ctx.storage("hierarchy tables", &packed.words)?,
+        ctx.storage("representatives", &packed.reps)?,
+        ctx.storage("A, S, U", &vec![Vec4::ZERO; 3 * n])?,
+    ];
+    let pipeline = ctx
+        .device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("lgh"),
+            layout: None,
+            module: &ctx
+                .device
+                .create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some("lgh"),
+                    source: wgpu::ShaderSource::Wgsl(source().into()),
+                }),
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+    let [params_buf, pixels, lights, lists, words, reps, out] = &buffers;
+    let bind = ctx.bind_group(
+        &pipeline,
+        &[
+            params_buf,
+            &scene.nodes,
+            &scene.tris,
+            pixels,
+            lights,
+            lists,
+            words,
+            reps,
+            out,
+        ],
+    );
+    ctx.dispatch(&pipeline, &bind, n)?;
+    let result: Vec<Vec4> = ctx.read_back(out, 3 * n)?;
+    let k = tables.k as usize;
+    let plane = |c: usize| -> Vec<Vec3> {
+        if k == 0 && c > 0 {
+            return Vec::new();
+        }
+        result.chunks(3).map(|p| p[c].truncate()).collect()
+    };
+    let mut timings = lgh_core::timing::Timings::default();
+    timings.push("lighting", start.elapsed().as_secs_f64() * 1e3);
+    Ok(LoopResult {
+        a: plane(0),
+        overdraw: result.chunks(3).map(|p| p[0].w as u32).collect(),
+        estimates: ShadowEstimates {
+            k,
+            s: plane(1),
+            u: plane(2),
+            rays: result.chunks(3).map(|p| p[1].w as u64).sum(),
+        },
+        timings,
+    })
+}

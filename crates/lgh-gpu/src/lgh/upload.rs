@@ -1,0 +1,179 @@
+//! The lighting loop's inputs ([`LghTables`]) packed as the buffers and uniform of
+//! `shaders/lgh.wgsl`.
+
+use glam::Vec4;
+use lgh_core::lighting_grid::representative::SLOTS;
+use lgh_render::methods::MethodInputs;
+use lgh_render::methods::lgh::tables::LghTables;
+use lgh_render::passes::gbuffer::GBuffer;
+
+use crate::context::GpuError;
+
+/// Hierarchies the uniform holds (the six normal bins, and room).
+pub(super) const MAX_HIERARCHIES: usize = 8;
+
+/// `Hier` of the shader: one hierarchy's place in the tables.
+#[repr(C)]
+#[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub(super) struct Hier {
+    first: u32,
+    grid_base: u32,
+    lowest: u32,
+    l_max: u32,
+    origin: [f32; 3],
+    h_top: f32,
+    alpha: f32,
+    rows_base: u32,
+    starts_base: u32,
+    children_base: u32,
+    reps_base: u32,
+    _pad: [u32; 3],
+}
+
+/// `Params` of the shader.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(super) struct Params {
+    pixels: u32,
+    k: u32,
+    hierarchies: u32,
+    list_lights: u32,
+    eps2: f32,
+    ray_eps: f32,
+    seed_lo: u32,
+    seed_hi: u32,
+    hier: [Hier; MAX_HIERARCHIES],
+}
+
+/// The storage buffers' contents.
+pub(super) struct Tables {
+    /// Per pixel: position (w: seen), normal, geometric normal, albedo (w: its light list).
+    pub(super) pixels: Vec<[Vec4; 4]>,
+    /// Per shaded light: position and reach^2, normal and isotropic share, intensity and
+    /// radius, blending floors with level and vertex x.
+    pub(super) lights: Vec<[Vec4; 4]>,
+    /// The lists' starts, then their lights.
+    pub(super) lists: Vec<u32>,
+    /// Per hierarchy: vertex-row starts of levels 1..=l_max, descent starts, descent
+    /// children as (child, bits of the running sum).
+    pub(super) words: Vec<u32>,
+    /// Per S_1 light, [`SLOTS`] x (position, normal, colour).
+    pub(super) reps: Vec<Vec4>,
+    /// Each hierarchy's place in `words` and `reps`.
+    hier: Vec<Hier>,
+}
+
+impl Tables {
+    /// Packs `t` for the pixels of `g`.
+    pub(super) fn new(g: &GBuffer, t: &LghTables) -> Result<Self, GpuError> {
+        if t.hierarchies.len() > MAX_HIERARCHIES {
+            return Err(GpuError::TooLarge(format!(
+                "{} hierarchies (at most {MAX_HIERARCHIES})",
+                t.hierarchies.len()
+            )));
+        }
+        let pixels = (0..g.len())
+            .map(|p| {
+                [
+                    g.position[p].extend(if g.is_hit(p) { 1.0 } else { 0.0 }),
+                    g.normal[p].extend(0.0),
+                    g.geo_normal[p].extend(0.0),
+                    g.albedo[p].extend(f32::from_bits(t.bins.list[p])),
+                ]
+            })
+            .collect();
+        let mut lights: Vec<[Vec4; 4]> = t
+            .lights
+            .iter()
+            .map(|l| {
+                let (rise, fall) = l.role.floors();
+                // The top level's infinite reach as the largest float: the shader compares.
+                let reach2 = l.reach2.min(f32::MAX);
+                [
+                    l.position.extend(reach2),
+                    l.normal.extend(l.iso),
+                    l.intensity.extend(l.radius),
+                    Vec4::new(rise, fall, f32::from(l.level), 0.0),
+                ]
+            })
+            .collect();
+        let mut lists = t.bins.offsets.clone();
+        lists.extend_from_slice(&t.bins.lights);
+        let (mut words, mut reps, mut hier) = (Vec::new(), Vec::new(), Vec::new());
+        for h in &t.hierarchies {
+            let grid = h.grid;
+            for (g_index, &x) in grid.vertex_x.iter().enumerate() {
+                if let Some(light) = lights.get_mut(h.grid_base as usize + g_index) {
+                    light[3].w = f32::from_bits(x);
+                }
+            }
+            let rows_base = words.len() as u32;
+            for rows in &grid.rows {
+                words.extend_from_slice(rows);
+            }
+            let starts_base = words.len() as u32;
+            words.extend_from_slice(h.descent_starts);
+            let children_base = words.len() as u32;
+            for &(c, sum) in h.descent_children {
+                words.extend_from_slice(&[c, sum.to_bits()]);
+            }
+            let reps_base = reps.len() as u32;
+            for set in &h.reps {
+                for slot in set {
+                    reps.extend_from_slice(&[
+                        slot.position.extend(0.0),
+                        slot.normal.extend(0.0),
+                        slot.colour.extend(0.0),
+                    ]);
+                }
+            }
+            hier.push(Hier {
+                first: h.first,
+                grid_base: h.grid_base,
+                lowest: grid.levels.lowest,
+                l_max: grid.geometry.l_max,
+                origin: grid.geometry.origin.into(),
+                h_top: grid.geometry.h_top,
+                alpha: grid.levels.alpha,
+                rows_base,
+                starts_base,
+                children_base,
+                reps_base,
+                _pad: [0; 3],
+            });
+        }
+        debug_assert_eq!(reps.len() % (3 * SLOTS), 0);
+        if words.len() > u32::MAX as usize / 2 || reps.len() > u32::MAX as usize / 2 {
+            return Err(GpuError::TooLarge("hierarchy tables".into()));
+        }
+        Ok(Self {
+            pixels,
+            lights,
+            lists,
+            words,
+            reps,
+            hier,
+        })
+    }
+}
+
+impl Params {
+    /// The uniform of a frame with inputs `i`, loop inputs `t` and packed tables `p`.
+    pub(super) fn new(i: &MethodInputs, t: &LghTables, p: &Tables) -> Result<Self, GpuError> {
+        let mut hier = [Hier::default(); MAX_HIERARCHIES];
+        hier[..p.hier.len()].copy_from_slice(&p.hier);
+        let seed = i.settings.seed;
+        Ok(Self {
+            pixels: u32::try_from(i.gbuffer.len())
+                .map_err(|_| GpuError::TooLarge("pixels".into()))?,
+            k: t.k,
+            hierarchies: p.hier.len() as u32,
+            list_lights: t.bins.offsets.len() as u32,
+            eps2: t.eps2,
+            ray_eps: i.world.ray_epsilon,
+            seed_lo: seed as u32,
+            seed_hi: (seed >> 32) as u32,
+            hier,
+        })
+    }
+}

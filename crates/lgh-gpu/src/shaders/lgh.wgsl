@@ -1,0 +1,391 @@
+// The LGH lighting loop on the GPU (Lin & Yuksel 2019 section 3.2, 3.3 and Appendix A), one
+// invocation per pixel: the unshadowed sum A over the pixel's light list, k shadow samples
+// drawn among its lights in proportion to f_j = lum(B_l I_j G_j) by stratified inversion of
+// the running sum, and per sample the unbiased estimate's target (docs/design.md, "Unbiased
+// estimate"): the walk down to an S_1 light, one of its representative VPLs by contribution,
+// a shadow ray, and the gain (sum rho / SLOTS) colour / (G_j Lambda_i) of a visible VPL. It
+// writes A, S = mean V U_k gain and U = mean U_k; lgh-render's ratio estimator finishes them.
+// The CPU counterpart is lgh-render's methods/lgh (shade.rs, lights.rs); each pixel sums its
+// own terms in a fixed order, so the result does not depend on scheduling.
+
+const PI: f32 = 3.14159265358979;
+const SLOTS: u32 = 16u;
+const MAX_HIERARCHIES: u32 = 8u;
+
+// One hierarchy's tables (lgh-render's tables::HierarchyTables).
+struct Hier {
+    first: u32,
+    grid_base: u32,
+    lowest: u32,
+    l_max: u32,
+    origin: vec3<f32>,
+    h_top: f32,
+    alpha: f32,
+    rows_base: u32,
+    starts_base: u32,
+    children_base: u32,
+    reps_base: u32,
+    _p0: u32,
+    _p1: u32,
+    _p2: u32,
+}
+
+struct Params {
+    pixels: u32,
+    k: u32,
+    hierarchies: u32,
+    list_lights: u32,
+    eps2: f32,
+    ray_eps: f32,
+    seed_lo: u32,
+    seed_hi: u32,
+    hier: array<Hier, 8>,
+}
+
+struct Pixel {
+    position: vec4<f32>,
+    normal: vec4<f32>,
+    geo_normal: vec4<f32>,
+    // rgb: albedo; w: the pixel's light list (bits of a u32).
+    albedo: vec4<f32>,
+}
+
+// A shaded light: position and reach^2; mean normal and isotropic share; intensity (times
+// n^2) and radius r_l; blending floors, level and the x of its vertex (bits of u32s).
+struct Light {
+    position: vec4<f32>,
+    normal: vec4<f32>,
+    intensity: vec4<f32>,
+    role: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> nodes: array<Node>;
+@group(0) @binding(2) var<storage, read> tris: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> gbuffer: array<Pixel>;
+@group(0) @binding(4) var<storage, read> lights: array<Light>;
+// The lists' starts, then their lights (from params.list_lights).
+@group(0) @binding(5) var<storage, read> lists: array<u32>;
+// Vertex-row starts, descent starts, then descent children as (child, bits of running sum).
+@group(0) @binding(6) var<storage, read> words: array<u32>;
+// Per S_1 light, SLOTS x (position, normal, colour).
+@group(0) @binding(7) var<storage, read> reps: array<vec4<f32>>;
+// Per pixel: A (w: overdraw), S (w: rays traced), U.
+@group(0) @binding(8) var<storage, read_write> out: array<vec4<f32>>;
+
+var<private> rng_state: u32;
+
+fn hash(v: u32) -> u32 {
+    let s = v * 747796405u + 2891336453u;
+    let w = ((s >> ((s >> 28u) + 4u)) ^ s) * 277803737u;
+    return (w >> 22u) ^ w;
+}
+
+fn next_f32() -> f32 {
+    rng_state = hash(rng_state);
+    return f32(rng_state >> 8u) * (1.0 / 16777216.0);
+}
+
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.299, 0.587, 0.114));
+}
+
+// B_l(d) for t = d / r_l with the role's floors (lgh_core::blending::LevelRole::floors).
+fn blend(t: f32, rise: f32, fall: f32) -> f32 {
+    return min(max(clamp(2.0 * t - 1.0, 0.0, 1.0), rise), max(clamp(2.0 - t, 0.0, 1.0), fall));
+}
+
+// The geometric factor of light `l` at x (normal n): B_l(d) cos_x cos_v / (pi (d^2 + eps^2)),
+// as lgh-render's LightBatch::eval; zero where the sphere does not reach x.
+fn light_factor(l: Light, x: vec3<f32>, n: vec3<f32>) -> f32 {
+    let d = l.position.xyz - x;
+    let d2 = dot(d, d);
+    if (!(d2 < l.position.w) || d2 <= 0.0) {
+        return 0.0;
+    }
+    let dl = sqrt(d2);
+    let inv_d = 1.0 / dl;
+    let b = blend(dl / l.intensity.w, l.role.x, l.role.y);
+    let cos_x = dot(n, d) * inv_d;
+    let cos_v = max(-dot(l.normal.xyz, d) * inv_d, 0.0) + l.normal.w;
+    if (b <= 0.0 || cos_x <= 0.0 || cos_v <= 0.0) {
+        return 0.0;
+    }
+    return b * cos_x * cos_v / (PI * (d2 + params.eps2));
+}
+
+// cos_x cos_q / (d^2 (d^2 + eps^2)) of a representative VPL (lights.rs, representative_weight).
+fn rep_weight(x: vec3<f32>, nx: vec3<f32>, q: vec3<f32>, nq: vec3<f32>) -> f32 {
+    let d = q - x;
+    let d2 = dot(d, d);
+    let w = max(dot(nx, d), 0.0) * max(-dot(nq, d), 0.0) / (d2 * (d2 + params.eps2));
+    if (d2 > 0.0 && w < 3.0e38) {
+        return w;
+    }
+    return 0.0;
+}
+
+fn hierarchy_of(j: u32) -> u32 {
+    var h = 0u;
+    for (var i = 1u; i < params.hierarchies; i++) {
+        if (params.hier[i].first <= j) {
+            h = i;
+        }
+    }
+    return h;
+}
+
+// h_l (GridGeometry::cell_size): h_0 = h_1 / 2.
+fn cell_size(h: Hier, l: u32) -> f32 {
+    let h1 = h.h_top / f32(1u << (h.l_max - 1u));
+    if (l == 0u) {
+        return 0.5 * h1;
+    }
+    return h.h_top / f32(1u << (h.l_max - l));
+}
+
+// The role's floors of level l (LevelRole::of, then floors).
+fn floors(h: Hier, l: u32) -> vec2<f32> {
+    if (h.lowest == h.l_max) {
+        return vec2<f32>(1.0, 1.0);
+    }
+    if (l == h.lowest) {
+        return vec2<f32>(1.0, 0.0);
+    }
+    if (l == h.l_max) {
+        return vec2<f32>(0.0, 1.0);
+    }
+    return vec2<f32>(0.0, 0.0);
+}
+
+// The light at vertex v of level l of hierarchy h, or 0xffffffff: its row, then its x.
+fn find_vertex(h: Hier, rows: u32, side: u32, v: vec3<u32>) -> u32 {
+    let row = v.z * side + v.y;
+    var lo = words[rows + row];
+    var hi = words[rows + row + 1u];
+    while (lo < hi) {
+        let mid = (lo + hi) / 2u;
+        let x = bitcast<u32>(lights[h.grid_base + mid].role.w);
+        if (x == v.x) {
+            return mid;
+        }
+        if (x < v.x) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    return 0xffffffffu;
+}
+
+// Lambda_i: the sum over the shaded levels of the blending weights at x of the grid lights
+// that VPL p is splatted to, each times its trilinear share (Partition::blend_total).
+fn blend_total(h: Hier, x: vec3<f32>, p: vec3<f32>) -> f32 {
+    var total = 0.0;
+    var rows = h.rows_base;
+    for (var l = 1u; l < h.lowest; l++) {
+        let side = (1u << (h.l_max - l)) + 1u;
+        rows += side * side + 1u;
+    }
+    for (var l = h.lowest; l <= h.l_max; l++) {
+        let r = h.alpha * cell_size(h, l);
+        let fl = floors(h, l);
+        if (l == 0u) {
+            total += blend(length(x - p) / r, fl.x, fl.y);
+            continue;
+        }
+        let hl = cell_size(h, l);
+        let cells = 1u << (h.l_max - l);
+        let side = cells + 1u;
+        let u = (p - h.origin) * (1.0 / hl);
+        let c = vec3<u32>(clamp(u, vec3<f32>(0.0), vec3<f32>(f32(cells - 1u))));
+        let f = clamp(u - vec3<f32>(c), vec3<f32>(0.0), vec3<f32>(1.0));
+        for (var corner = 0u; corner < 8u; corner++) {
+            let d = vec3<u32>(corner & 1u, (corner >> 1u) & 1u, corner >> 2u);
+            let g = find_vertex(h, rows, side, c + d);
+            if (g == 0xffffffffu) {
+                continue;
+            }
+            let fw = select(vec3<f32>(1.0) - f, f, d == vec3<u32>(1u));
+            let q = lights[h.grid_base + g].position.xyz;
+            total += fw.x * fw.y * fw.z * blend(length(q - x) / r, fl.x, fl.y);
+        }
+        rows += side * side + 1u;
+    }
+    return total;
+}
+
+// The S_1 light reached from grid light `node` of hierarchy h by the walk down the levels,
+// a child per level in proportion to its share (lgh_core::lighting_grid::descent).
+fn walk(h: Hier, start: u32) -> u32 {
+    var node = start;
+    loop {
+        let a = words[h.starts_base + node];
+        let b = words[h.starts_base + node + 1u];
+        if (a >= b) {
+            break;
+        }
+        let total = bitcast<f32>(words[h.children_base + 2u * (b - 1u) + 1u]);
+        let goal = next_f32() * total;
+        var pick = b - 1u;
+        for (var e = a; e < b; e++) {
+            if (bitcast<f32>(words[h.children_base + 2u * e + 1u]) > goal) {
+                pick = e;
+                break;
+            }
+        }
+        node = words[h.children_base + 2u * pick];
+    }
+    return node;
+}
+
+// What one shadow sample of light j (contribution c, weight f, of W in all) adds to S, and
+// whether it traced a ray.
+fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f32>, c: vec3<f32>) -> vec4<f32> {
+    let hi = hierarchy_of(j);
+    let h = params.hier[hi];
+    let lj = lights[j];
+    var q = lj.position.xyz;
+    var nq = lj.normal.xyz;
+    var colour = vec3<f32>(1.0);
+    var mean_rho = 0.0;
+    if (j < h.grid_base) {
+        // A VPL shaded as S_0 stands for itself.
+        mean_rho = rep_weight(x, n, q, nq);
+    } else {
+        let s1 = walk(h, j - h.grid_base);
+        let base = h.reps_base + 3u * SLOTS * s1;
+        var w: array<f32, 16>;
+        var total = 0.0;
+        for (var s = 0u; s < SLOTS; s++) {
+            w[s] = rep_weight(x, n, reps[base + 3u * s].xyz, reps[base + 3u * s + 1u].xyz);
+            total += w[s];
+        }
+        if (!(total > 0.0)) {
+            return vec4<f32>(0.0);
+        }
+        var t = next_f32() * total;
+        var pick = SLOTS - 1u;
+        for (var s = 0u; s < SLOTS; s++) {
+            if (t < w[s]) {
+                pick = s;
+                break;
+            }
+            t -= w[s];
+        }
+        q = reps[base + 3u * pick].xyz;
+        nq = reps[base + 3u * pick + 1u].xyz;
+        let lum_c = luminance(c);
+        let chroma = select(vec3<f32>(0.0), c / lum_c, lum_c > 0.0);
+        colour = select(vec3<f32>(0.0), reps[base + 3u * pick + 2u].xyz / chroma, chroma > vec3<f32>(0.0));
+        mean_rho = total / f32(SLOTS);
+    }
+    if (!(mean_rho > 0.0)) {
+        return vec4<f32>(0.0);
+    }
+    if (occluded_between(x, ng, q, nq, params.ray_eps)) {
+        return vec4<f32>(0.0, 0.0, 0.0, 1.0);
+    }
+    let lambda = blend_total(h, x, q);
+    let dj = lj.position.xyz - x;
+    let d2 = dot(dj, dj);
+    let inv_d = inverseSqrt(d2);
+    let cos_x = dot(n, dj) * inv_d;
+    let cos_v = max(-dot(lj.normal.xyz, dj) * inv_d, 0.0) + lj.normal.w;
+    let geo = select(0.0, cos_x * cos_v / (d2 + params.eps2), cos_x > 0.0 && cos_v > 0.0 && d2 > 0.0);
+    if (!(lambda > 0.0) || !(geo > 0.0)) {
+        return vec4<f32>(0.0, 0.0, 0.0, 1.0);
+    }
+    let gain = colour * mean_rho / (geo * lambda);
+    if (any(abs(gain) > vec3<f32>(3.0e38)) || any(gain != gain)) {
+        return vec4<f32>(0.0, 0.0, 0.0, 1.0);
+    }
+    return vec4<f32>(u_k * gain, 1.0);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if (i >= params.pixels) {
+        return;
+    }
+    let px = gbuffer[i];
+    if (px.position.w == 0.0) {
+        out[3u * i] = vec4<f32>(0.0);
+        out[3u * i + 1u] = vec4<f32>(0.0);
+        out[3u * i + 2u] = vec4<f32>(0.0);
+        return;
+    }
+    let x = px.position.xyz;
+    let n = px.normal.xyz;
+    let ng = px.geo_normal.xyz;
+    let list = bitcast<u32>(px.albedo.w);
+    let first = lists[list];
+    let last = lists[list + 1u];
+    // The lighting loop: A, the overdraw and the candidates' total weight W.
+    var a = vec3<f32>(0.0);
+    var overdraw = 0u;
+    var total = 0.0;
+    for (var e = first; e < last; e++) {
+        let l = lights[lists[params.list_lights + e]];
+        let d = l.position.xyz - x;
+        overdraw += select(0u, 1u, dot(d, d) < l.position.w);
+        let c = light_factor(l, x, n) * l.intensity.xyz;
+        a += c;
+        let f = luminance(c);
+        if (f > 0.0 && f < 3.0e38) {
+            total += f;
+        }
+    }
+    var s_sum = vec3<f32>(0.0);
+    var u_sum = vec3<f32>(0.0);
+    var rays = 0u;
+    let k = params.k;
+    if (k > 0u && total > 0.0 && total < 3.0e38) {
+        rng_state = hash(params.seed_lo ^ hash(params.seed_hi ^ hash(i)));
+        // Stratified selection: sample s takes the light where the running weight passes
+        // t_s = (s + u_s) / k W (shading.rs, stratified_picks); the second pass meets the
+        // thresholds in order.
+        var s = 0u;
+        var t = next_f32() / f32(k) * total;
+        var acc = 0.0;
+        var last_j = 0xffffffffu;
+        var last_c = vec3<f32>(0.0);
+        var last_f = 0.0;
+        for (var e = first; e < last && s < k; e++) {
+            let j = lists[params.list_lights + e];
+            let l = lights[j];
+            let c = light_factor(l, x, n) * l.intensity.xyz;
+            let f = luminance(c);
+            if (!(f > 0.0 && f < 3.0e38)) {
+                continue;
+            }
+            acc += f;
+            last_j = j;
+            last_c = c;
+            last_f = f;
+            while (s < k && acc > t) {
+                let u_k = c * (total / f);
+                u_sum += u_k;
+                let r = shadow_sample(x, n, ng, j, u_k, c);
+                s_sum += r.xyz;
+                rays += u32(r.w);
+                s++;
+                t = (f32(s) + next_f32()) / f32(k) * total;
+            }
+        }
+        // Thresholds that rounding left beyond the last running sum take the last light.
+        while (s < k && last_j != 0xffffffffu) {
+            let u_k = last_c * (total / last_f);
+            u_sum += u_k;
+            let r = shadow_sample(x, n, ng, last_j, u_k, last_c);
+            s_sum += r.xyz;
+            rays += u32(r.w);
+            s++;
+        }
+    }
+    let kf = f32(max(k, 1u));
+    out[3u * i] = vec4<f32>(a, f32(overdraw));
+    out[3u * i + 1u] = vec4<f32>(s_sum / kf, f32(rays));
+    out[3u * i + 2u] = vec4<f32>(u_sum / kf, 0.0);
+}

@@ -1,0 +1,324 @@
+//! An `lgh` frame in its three steps (Lin & Yuksel 2019 sections 3.1-3.3): what comes before
+//! the lighting loop (hierarchies, shaded lights, tile bins; [`LghFrame::prepare`]), the
+//! lighting loop with its shadow rays ([`LghFrame::shade`] on the CPU), and what comes after
+//! it (ratio estimator, filters; [`LghFrame::finish`]). A backend that runs the loop
+//! elsewhere (lgh-gpu) takes the same first and last steps, so that both backends shade the
+//! same lights with the same filters.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::Vec3;
+use lgh_core::lighting_grid::GridError;
+use lgh_core::lighting_grid::partition::ShadedLevels;
+use lgh_core::rng::Rng;
+use lgh_core::timing::Timings;
+use lgh_core::vpl::Vpls;
+use rayon::prelude::*;
+
+use super::LghStats;
+use super::lights::{LghTargets, ShadeLights, split_by_normal};
+use super::settings::{DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt};
+use super::settings::{ShadowTarget, auto_tile};
+use super::shade::{RowContext, RowScratch, shade_rows};
+use crate::memory::FrameMemory;
+use crate::methods::lgh::light_batch::PackedLight;
+use crate::methods::{MethodInputs, MethodOutput};
+use crate::passes::par_filled;
+use crate::shading::ratio::{RATIO_CORRECTION, RATIO_VISIBILITY, RatioFilter, shadowed_indirect};
+use crate::shading::reservoirs::ReservoirLayout;
+use crate::shading::shadow_pass::{ShadowEstimates, ShadowPass, Targets};
+use crate::shading::tiles::{AllBounds, InterleavedBins};
+
+/// Random-stream tag of the grid offset of `--grid-jitter`.
+const STREAM_GRID_SHIFT: u64 = 0x6a1d;
+
+/// What [`LghFrame::prepare`] gives: a frame ready for its lighting loop, or the finished
+/// output of a frame without VPLs.
+pub enum Prepared {
+    /// The frame before its lighting loop.
+    Frame(Box<LghFrame>),
+    /// No VPLs: a black frame, already finished.
+    Dark(MethodOutput),
+}
+
+/// An `lgh` frame before its lighting loop: its shaded lights (the grid lights of the shaded
+/// levels of every hierarchy, and the VPLs as S_0), their tile bins, and what the loop and
+/// the ratio estimator need.
+pub struct LghFrame {
+    pub(super) lights: ShadeLights,
+    pub(super) bins: InterleavedBins,
+    pub(super) packed: Vec<PackedLight>,
+    pub(super) stats: LghStats,
+    timings: Timings,
+    /// Milliseconds of the lighting pass spent before the loop (the shaded lights).
+    lighting_ms: f64,
+    /// Shadow samples per pixel (0: unshadowed).
+    pub(super) k: usize,
+    /// Interleaving n.
+    pub(super) n: u32,
+    pub(super) eps2: f32,
+}
+
+/// What a lighting loop gives for every pixel ([`LghFrame::shade`] on the CPU): the
+/// unshadowed sum A, the overdraw (lights whose sphere covers the pixel), the shadow
+/// estimates S and U, and its pass timings in milliseconds.
+#[derive(Clone, Debug, Default)]
+pub struct LoopResult {
+    /// A per pixel.
+    pub a: Vec<Vec3>,
+    /// Overdraw per pixel.
+    pub overdraw: Vec<u32>,
+    /// S, U and the rays traced.
+    pub estimates: ShadowEstimates,
+    /// Timings of the loop's passes ("lighting", "shadow_targets", "shadow_rays").
+    pub timings: Timings,
+}
+
+impl LghFrame {
+    /// The steps before the lighting loop (sections 3.1 and 3.2): the hierarchies (one per
+    /// dominant normal direction with `normal_bins`), the shaded lights with their radii and
+    /// roles, what the shadow targets need (representatives, or the unbiased estimate's
+    /// walks), and the lights binned into screen tiles. With `tables`, each hierarchy's
+    /// lookup tables are kept for [`LghFrame::tables`] (a backend that runs the loop
+    /// elsewhere).
+    ///
+    /// # Errors
+    /// The VPLs cannot form a hierarchy (non-finite values).
+    pub fn prepare(
+        inputs: &MethodInputs,
+        shadowed: bool,
+        memory: &mut FrameMemory,
+        tables: bool,
+    ) -> Result<Prepared, GridError> {
+        let MethodInputs {
+            gbuffer: g,
+            camera: frame,
+            vpls,
+            settings: all,
+            ..
+        } = *inputs;
+        let (settings, seed) = (&all.lgh, all.seed);
+        let builder = &mut memory.grid;
+        builder.set_shift(settings.grid_jitter.then(|| {
+            let mut rng = Rng::new(&[seed, STREAM_GRID_SHIFT]);
+            Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())
+        }));
+        let mut t = Timings::default();
+        let n_px = g.len();
+        let k = all.shadows.k(shadowed, DEFAULT_SHADOW_SAMPLES);
+        let n = all.tiling.interleave.unwrap_or(DEFAULT_INTERLEAVE).max(1);
+        let mut stats = LghStats {
+            alpha: settings.alpha,
+            shadow_samples: k as u32,
+            interleave: n,
+            ..LghStats::default()
+        };
+        if vpls.is_empty() {
+            return Ok(Prepared::Dark(MethodOutput {
+                radiance: par_filled(n_px, Vec3::ZERO),
+                lights_per_pixel: Some(par_filled(n_px, 0)),
+                stats: Some(Arc::new(stats)),
+                ..MethodOutput::default()
+            }));
+        }
+        // One hierarchy, or one per dominant normal direction (--normal-bins).
+        let split;
+        let groups: Vec<&Vpls> = if settings.normal_bins {
+            split = split_by_normal(vpls);
+            split.iter().collect()
+        } else {
+            vec![vpls]
+        };
+        let lowest = settings.start_level.min(1);
+        let unbiased = settings.estimator == Estimator::Unbiased;
+        let n2 = (n * n) as usize;
+        let mut lights = ShadeLights::default();
+        let (mut build_ms, mut lighting_ms, mut reps_ms) = (0.0, 0.0, 0.0);
+        for group in groups.iter().filter(|g| !g.is_empty()) {
+            let input = group.as_input();
+            let start = Instant::now();
+            builder.build(&input, settings.levels, settings.construction)?;
+            build_ms += start.elapsed().as_secs_f64() * 1e3;
+            let Some(grid) = builder.grid() else { continue };
+            let start = Instant::now();
+            stats.grid_lights += grid.len();
+            stats.levels = stats.levels.max(grid.l_max());
+            let first = lights.position.len();
+            lights.add_hierarchy(grid, group, lowest, settings.alpha, settings.emission, n2);
+            lighting_ms += start.elapsed().as_secs_f64() * 1e3;
+            if k > 0 && settings.shadow_target == ShadowTarget::Representative {
+                let start = Instant::now();
+                if unbiased {
+                    let levels = ShadedLevels {
+                        lowest,
+                        alpha: settings.alpha,
+                    };
+                    lights.add_unbiased(grid, group, levels, seed, first, tables);
+                } else {
+                    lights.add_representatives(
+                        grid,
+                        group,
+                        lowest,
+                        settings.shadow_from_level,
+                        settings.construction,
+                        seed,
+                    );
+                }
+                reps_ms += start.elapsed().as_secs_f64() * 1e3;
+            }
+        }
+        t.push("lgh_build", build_ms);
+        if reps_ms > 0.0 {
+            t.push("representatives", reps_ms);
+        }
+        let start = Instant::now();
+        stats.shaded_lights = lights.position.len();
+        if let Some(level) = settings.only_level {
+            lights.show_only_level(level);
+        }
+        let tile = all.tiling.tile.unwrap_or_else(|| auto_tile(n)).max(1);
+        let bounds = memory
+            .tile_bounds
+            .get_or_insert_with(g, [n, tile, 0, 0], || AllBounds::new(g, n, tile * n));
+        let bins = InterleavedBins::from_bounds(
+            g,
+            frame,
+            bounds,
+            &lights.position,
+            &lights.reach,
+            &lights.sub,
+        );
+        let packed = lights.packed(n2 as f32);
+        lighting_ms += start.elapsed().as_secs_f64() * 1e3;
+        Ok(Prepared::Frame(Box::new(Self {
+            lights,
+            bins,
+            packed,
+            stats,
+            timings: t,
+            lighting_ms,
+            k,
+            n,
+            eps2: inputs.eps() * inputs.eps(),
+        })))
+    }
+
+    /// The lighting loop on the CPU (section 3.2 and Appendix A) and the shadow rays (3.3):
+    /// per pixel A, the overdraw, and the shadow estimates S and U, in bands of rows
+    /// ([`ShadowPass::shade_in_bands`]).
+    #[must_use]
+    pub fn shade(&self, inputs: &MethodInputs) -> LoopResult {
+        let MethodInputs {
+            world,
+            gbuffer: g,
+            settings: all,
+            ..
+        } = *inputs;
+        let (settings, seed, k) = (&all.lgh, all.seed, self.k);
+        let start = Instant::now();
+        let representative = settings.shadow_target == ShadowTarget::Representative;
+        // Per pixel: A and overdraw; and k reservoirs.
+        let mut shaded: Vec<(Vec3, u32)> = par_filled(g.len(), (Vec3::ZERO, 0));
+        let ctx = RowContext {
+            g,
+            bins: &self.bins,
+            packed: &self.packed,
+            lights: &self.lights,
+            settings,
+            layout: ReservoirLayout::new(k),
+            k,
+            representative,
+            eps2: self.eps2,
+            seed,
+            phases: self.n as usize,
+        };
+        let targets = LghTargets {
+            lights: &self.lights,
+            g,
+            seed,
+            eps2: self.eps2,
+        };
+        // One row of tiles per call, so that a tile's light batch serves all its rows.
+        let pass =
+            ShadowPass::new(world, g, k, seed).with_group_rows(self.bins.tile_pixels() as usize);
+        let (estimates, times) = pass.shade_in_bands(
+            &mut shaded,
+            RowScratch::default,
+            |scratch, y0, rows, res| shade_rows(&ctx, y0, rows, res, scratch),
+            (representative && settings.jitter == JitterAt::Ray)
+                .then_some(&targets as &dyn Targets),
+        );
+        let mut timings = Timings::default();
+        timings.push(
+            "lighting",
+            start.elapsed().as_secs_f64() * 1e3 - times.resolve_ms - times.rays_ms,
+        );
+        if times.resolve_ms > 0.0 {
+            timings.push("shadow_targets", times.resolve_ms);
+        }
+        if k > 0 {
+            timings.push("shadow_rays", times.rays_ms);
+        }
+        LoopResult {
+            a: shaded.par_iter().map(|p| p.0).collect(),
+            overdraw: shaded.par_iter().map(|p| p.1).collect(),
+            estimates,
+            timings,
+        }
+    }
+
+    /// The steps after the lighting loop (3.3): the interleaving blur, the ratio estimator
+    /// with its a-trous filter and the composite, from the loop's `shaded` result. The
+    /// frame's timings are the preparation's, the loop's and the filters'.
+    #[must_use]
+    pub fn finish(
+        self,
+        inputs: &MethodInputs,
+        shaded: LoopResult,
+        memory: &mut FrameMemory,
+    ) -> MethodOutput {
+        let Self {
+            mut stats,
+            timings: mut t,
+            lighting_ms,
+            n,
+            ..
+        } = self;
+        let (world, g, all) = (inputs.world, inputs.gbuffer, inputs.settings);
+        let LoopResult {
+            a,
+            overdraw,
+            estimates,
+            timings,
+        } = shaded;
+        for (name, ms) in timings.0 {
+            let ms = if name == "lighting" {
+                ms + lighting_ms
+            } else {
+                ms
+            };
+            t.push(&name, ms);
+        }
+        stats.avg_overdraw = g.mean_over_hits(&overdraw);
+        let filter = RatioFilter {
+            max_ratio: if all.lgh.estimator == Estimator::Unbiased {
+                RATIO_CORRECTION
+            } else {
+                RATIO_VISIBILITY
+            },
+            ..all.ratio_filter(n)
+        };
+        let shadowed = shadowed_indirect(world, g, a, estimates, &filter, &mut t, memory);
+        stats.shadow_rays = shadowed.rays;
+        MethodOutput {
+            radiance: shadowed.indirect,
+            unshadowed: Some(shadowed.unshadowed),
+            shadow_ratio: Some(shadowed.ratio),
+            lights_per_pixel: Some(overdraw),
+            shadow_rays: shadowed.rays,
+            timings: t,
+            stats: Some(Arc::new(stats)),
+        }
+    }
+}

@@ -1,0 +1,133 @@
+//! The `lgh` lighting loop's inputs as flat tables, for a backend that runs the loop
+//! elsewhere (lgh-gpu): the shaded lights, one light list per pixel, and per hierarchy what
+//! the unbiased estimate's shadow targets read (docs/design.md, "Unbiased estimate"): the
+//! vertex rows that find a grid light's centroid for Lambda_i, the children of every light
+//! for the walk down to S_1, and the S_1 lights' representatives.
+
+use glam::Vec3;
+use lgh_core::lighting_grid::LightingGrid;
+use lgh_core::lighting_grid::geometry::GridGeometry;
+use lgh_core::lighting_grid::lookup::row_starts;
+use lgh_core::lighting_grid::partition::ShadedLevels;
+use lgh_core::lighting_grid::representative::SLOTS;
+
+use super::LghFrame;
+use super::light_batch::PackedLight;
+use crate::shading::tiles::FlatBins;
+
+/// One hierarchy's grid as flat tables: its geometry and shaded levels, the x coordinate
+/// of every grid light's vertex, and per level l >= 1 where each vertex row starts
+/// ([`row_starts`]): a vertex's light is found in its row by its x.
+#[derive(Clone, Debug)]
+pub struct GridTables {
+    /// The grid's geometry (origin, top cell size, l_max).
+    pub geometry: GridGeometry,
+    /// The shaded levels (lowest, alpha).
+    pub levels: ShadedLevels,
+    /// Per grid light, the x coordinate of its vertex.
+    pub vertex_x: Vec<u32>,
+    /// Per level l = 1..=l_max (index l - 1), the row starts.
+    pub rows: Vec<Vec<u32>>,
+}
+
+impl GridTables {
+    /// The tables of `grid`, shaded at `levels`.
+    #[must_use]
+    pub(super) fn new(grid: &LightingGrid, levels: ShadedLevels) -> Self {
+        Self {
+            geometry: grid.geometry,
+            levels,
+            vertex_x: grid.vertex.iter().map(|v| v.x).collect(),
+            rows: (1..=grid.l_max()).map(|l| row_starts(grid, l)).collect(),
+        }
+    }
+}
+
+/// One representative VPL of an S_1 light: position, normal and the colour of its flux
+/// (at unit luminance).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RepSlot {
+    /// Position.
+    pub position: Vec3,
+    /// Normal (zero for an empty slot).
+    pub normal: Vec3,
+    /// Flux colour.
+    pub colour: Vec3,
+}
+
+/// What the unbiased estimate reads of one hierarchy.
+#[derive(Clone, Debug)]
+pub struct HierarchyTables<'a> {
+    /// Index among the shaded lights of the hierarchy's first light.
+    pub first: u32,
+    /// Index among the shaded lights of its grid light 0 (after its VPLs if they are shaded).
+    pub grid_base: u32,
+    /// Its grid.
+    pub grid: &'a GridTables,
+    /// Light j's children are `children[starts[j]..starts[j + 1]]` (grid indices).
+    pub descent_starts: &'a [u32],
+    /// (child, running sum of the weights).
+    pub descent_children: &'a [(u32, f32)],
+    /// The [`SLOTS`] representatives of every S_1 light, by grid index.
+    pub reps: Vec<[RepSlot; SLOTS]>,
+}
+
+/// The lighting loop's inputs of one frame ([`LghFrame::tables`]).
+#[derive(Clone, Debug)]
+pub struct LghTables<'a> {
+    /// The shaded lights (intensities times n^2 for n x n interleaving).
+    pub lights: &'a [PackedLight],
+    /// The light list of every pixel.
+    pub bins: FlatBins,
+    /// Per hierarchy, the unbiased estimate's tables (empty without shadow samples).
+    pub hierarchies: Vec<HierarchyTables<'a>>,
+    /// Shadow samples per pixel.
+    pub k: u32,
+    /// Interleaving n.
+    pub n: u32,
+    /// eps^2 of the 1/d^2 clamp.
+    pub eps2: f32,
+}
+
+impl LghFrame {
+    /// The lighting loop's inputs as flat tables for a `width` x `height` G-buffer (the
+    /// frame's). The hierarchies' tables are there if the frame was prepared with them
+    /// ([`LghFrame::prepare`]) for the unbiased estimate; `None` if it was not.
+    #[must_use]
+    pub fn tables(&self, width: u32, height: u32) -> Option<LghTables<'_>> {
+        let mut hierarchies = Vec::new();
+        for h in &self.lights.hierarchies {
+            let (descent_starts, descent_children) = h.descent.tables();
+            let reps = h
+                .reps
+                .iter()
+                .map(|set| {
+                    std::array::from_fn(|s| {
+                        let (position, normal) = set.get(s);
+                        RepSlot {
+                            position,
+                            normal,
+                            colour: set.colour(s),
+                        }
+                    })
+                })
+                .collect();
+            hierarchies.push(HierarchyTables {
+                first: h.first as u32,
+                grid_base: h.grid_base as u32,
+                grid: h.tables.as_ref()?,
+                descent_starts,
+                descent_children,
+                reps,
+            });
+        }
+        Some(LghTables {
+            lights: &self.packed,
+            bins: self.bins.flatten(width, height),
+            hierarchies,
+            k: self.k as u32,
+            n: self.n,
+            eps2: self.eps2,
+        })
+    }
+}
