@@ -131,9 +131,14 @@ fn given(matches: &clap::ArgMatches, command: &str, id: &str) -> bool {
 
 /// `lgh view`: loads the scene (default: the Cornell box with a point light, which can be
 /// moved) and runs the viewer.
-fn view(args: lgh_view::ViewArgs) -> anyhow::Result<()> {
+fn view(mut args: lgh_view::ViewArgs) -> anyhow::Result<()> {
     set_threads(args.threads)?;
     args.check()?;
+    if args.device == lgh_render::settings::Device::Gpu {
+        let device = lgh_gpu::GpuContext::shared()?.adapter_name();
+        eprintln!("GPU: {device}");
+        args.backend = Some(lgh_gpu::gpu_method);
+    }
     let default = std::path::PathBuf::from("builtin:cornell-moving-light");
     let scene = scene_arg::load_scene(Some(args.scene.as_ref().unwrap_or(&default)))?;
     // The viewer holds two frames (the accumulated or filtered history beside the new one).

@@ -27,7 +27,7 @@ pub enum GpuError {
     Failed(String),
     /// This method has no GPU version yet.
     #[error(
-        "--method {0} does not run on the GPU yet (--device gpu runs: brute, brute-unshadowed)"
+        "--method {0} does not run on the GPU yet (--device gpu runs: lgh, lgh-unshadowed, brute, brute-unshadowed)"
     )]
     NotPorted(String),
 }

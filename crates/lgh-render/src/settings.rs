@@ -32,6 +32,24 @@ pub enum Component {
     Indirect,
 }
 
+/// Where a frame's indirect light is computed: the renderer runs on the CPU; a backend
+/// crate (lgh-gpu) supplies GPU methods under the same names, which the command line and
+/// the viewer pick with `--device gpu`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum Device {
+    /// The CPU (every method).
+    #[default]
+    Cpu,
+    /// The GPU through wgpu (the methods and passes ported so far).
+    Gpu,
+}
+
+/// A backend's stand-in for a method: the GPU method of the same name, or `None` where the
+/// method has not been ported (lgh-gpu's `gpu_method`).
+pub type MethodMap = fn(crate::Method) -> Option<crate::Method>;
+
 /// Filters of the shadow estimates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]

@@ -13,6 +13,7 @@ use lgh_render::image::heat::{HEAT_EXPOSURE, heat_map};
 use lgh_render::image::tonemap::tonemap_pixel;
 use lgh_render::methods::lgh::LghStats;
 use lgh_render::sequence::Sequence;
+use lgh_render::settings::MethodMap;
 use lgh_render::world::accel::AccelKind;
 use lgh_render::{FrameMemory, Image, RenderError, Silent, World, render_frame_with};
 use lgh_scene::{Light, Scene};
@@ -44,6 +45,8 @@ pub struct ShownFrame {
     pub overdraw: Option<(f64, u32)>,
     /// Wall time of the frame, ms, including the view update.
     pub ms: f64,
+    /// Where its indirect light was computed: "cpu" or "gpu".
+    pub device: &'static str,
 }
 
 /// Renders the frames of a view.
@@ -57,6 +60,7 @@ pub struct FrameLoop {
     shown_version: Option<u64>,
     frame: u64,
     exposure: f32,
+    backend: Option<MethodMap>,
 }
 
 impl FrameLoop {
@@ -83,7 +87,15 @@ impl FrameLoop {
             shown_version: None,
             frame: 0,
             exposure,
+            backend: None,
         })
+    }
+
+    /// The same loop computing the indirect light with `backend`'s method where it has one
+    /// (the GPU's, `--device gpu`), and on the CPU where it has none.
+    #[must_use]
+    pub fn with_backend(self, backend: Option<MethodMap>) -> Self {
+        Self { backend, ..self }
     }
 
     /// The world rendered (its scene, radius and centre).
@@ -128,6 +140,10 @@ impl FrameLoop {
         let shown = if still { self.accumulated + 1 } else { 1 };
         settings.vpl_clamp = state.settings.vpl_clamp / (shown as f32).sqrt();
         self.frame += 1;
+        let mut device = "cpu";
+        if let Some(m) = self.backend.and_then(|map| map(settings.method)) {
+            (settings.method, device) = (m, "gpu");
+        }
         let mut frame = if still || !state.taa {
             render_frame_with(&self.world, &settings, &Silent, &mut self.memory)?
         } else {
@@ -192,6 +208,7 @@ impl FrameLoop {
             accumulated: self.accumulated,
             overdraw,
             ms: start.elapsed().as_secs_f64() * 1e3,
+            device,
         };
         if still || !state.taa {
             self.memory.recycle_gbuffer(frame.gbuffer);

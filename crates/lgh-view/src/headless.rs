@@ -10,6 +10,7 @@ use lgh_scene::Scene;
 use crate::ViewArgs;
 use crate::engine::{FrameLoop, ShownFrame};
 use crate::state::{ViewState, action_of_key};
+use lgh_render::settings::Device;
 
 /// Per-frame records of a run, for the statistics.
 #[derive(Debug, Default)]
@@ -68,6 +69,7 @@ impl Record {
             "median_ms": medians,
             "vpls": self.last().map(|f| f.vpls),
             "grid_lights": self.last().and_then(|f| f.grid_lights),
+            "device": self.last().map(|f| f.device),
             "light_speed_degrees": args.light_speed,
             "taa": state.taa,
             "settings": state.settings,
@@ -151,7 +153,12 @@ pub fn start(args: &ViewArgs, scene: Scene) -> Result<(FrameLoop, ViewState)> {
     settings.validate()?;
     args.check()?;
     let camera = scene.camera();
-    let engine = FrameLoop::new(scene, settings.exposure, args.accel.kind())?;
+    let backend = match (args.device, args.backend) {
+        (Device::Cpu, _) => None,
+        (Device::Gpu, Some(map)) => Some(map),
+        (Device::Gpu, None) => bail!("--device gpu: this program has no GPU backend"),
+    };
+    let engine = FrameLoop::new(scene, settings.exposure, args.accel.kind())?.with_backend(backend);
     let state = ViewState::new(settings, &camera, engine.world().radius, args.taa);
     Ok((engine, state))
 }

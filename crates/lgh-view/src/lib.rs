@@ -32,7 +32,7 @@ use std::path::PathBuf;
 use clap::Args;
 use lgh_render::RenderSettings;
 use lgh_render::methods::lgh;
-use lgh_render::settings::parse_size;
+use lgh_render::settings::{Device, MethodMap, parse_size};
 
 /// Arguments of `lgh view`.
 #[derive(Debug, Args)]
@@ -78,6 +78,15 @@ pub struct ViewArgs {
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
+    /// Where the indirect light is computed: cpu, or gpu (the passes `lgh render --device
+    /// gpu` runs there; a method not ported yet, cycled to with M, runs on the CPU and the
+    /// readout says so).
+    #[arg(long, value_enum, default_value_t = Device::Cpu)]
+    pub device: Device,
+    /// With `--device gpu`: the GPU method standing for each method (set by the program that
+    /// links the GPU backend, e.g. `lgh_gpu::gpu_method`; not a flag).
+    #[arg(skip)]
+    pub backend: Option<MethodMap>,
 }
 
 /// The most frames `--frames` takes (a million: over four hours at 60 fps).

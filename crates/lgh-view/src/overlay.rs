@@ -26,8 +26,9 @@ pub fn readout(f: &ShownFrame, s: &ViewState) -> Vec<String> {
     let mut lines = vec![
         format!("{:.1} fps  {:.0} ms", 1e3 / f.ms.max(1e-3), f.ms),
         format!(
-            "{}  alpha {}  interleave {}  k {}",
+            "{} ({})  alpha {}  interleave {}  k {}",
             st.method.name(),
+            f.device,
             st.lgh.alpha,
             st.tiling.interleave.unwrap_or(INTERACTIVE_INTERLEAVE),
             st.shadow_samples(),

@@ -6,16 +6,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use lgh_render::RenderSettings;
 use lgh_render::denoise::temporal::TemporalSettings;
-pub use lgh_render::settings::parse_size;
-
-/// Where a frame's indirect light is computed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Device {
-    /// The CPU (every method).
-    Cpu,
-    /// The GPU through wgpu (the methods ported so far).
-    Gpu,
-}
+pub use lgh_render::settings::{Device, parse_size};
 
 /// Render a scene to an image.
 #[derive(Debug, Args)]
@@ -46,8 +37,10 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub accel: lgh_render::world::accel::AccelChoice,
     /// Where the indirect light is computed: cpu, or gpu (wgpu compute shaders on a Vulkan,
-    /// Metal or DX12 adapter; so far the brute-force methods brute and brute-unshadowed; the
-    /// G-buffer, VPLs and direct light stay on the CPU).
+    /// Metal or DX12 adapter). On the GPU so far: brute and brute-unshadowed whole, and lgh
+    /// and lgh-unshadowed's lighting loop with its shadow samples, targets and rays (lgh's
+    /// default estimate only); the G-buffer, VPLs, hierarchy build, filters and direct light
+    /// stay on the CPU.
     #[arg(long, value_enum, default_value_t = Device::Cpu)]
     pub device: Device,
     /// Render N frames of the (static) view with independent VPL sets (seeds derived from

@@ -110,36 +110,44 @@ fn headless_view_reports_fps_and_pass_medians_and_follows_the_key_script() {
 }
 
 /// The window opens under Xvfb, renders, takes the scripted keys and writes a screenshot
-/// equal to the headless frame.
+/// equal to the headless frame; with a GPU adapter (lavapipe in CI) the same with
+/// `--device gpu`.
 #[test]
 #[cfg_attr(not(xvfb), ignore = "needs Debian's xvfb")]
 fn the_window_under_xvfb_shows_the_headless_frame() {
     let d = temp_dir("xvfb");
-    let window = d.join("w.png");
-    let headless = d.join("h.png");
-    let keys = ["--keys", "w,m,l,i"];
-    let bin = env!("CARGO_BIN_EXE_lgh");
-    let args = [
-        &["-a", bin, "view", "--screenshot", s(&window)][..],
-        &SMALL,
-        &keys,
-    ]
-    .concat();
-    let r = std::process::Command::new("xvfb-run")
-        .args(&args)
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .unwrap();
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let r = lgh(&[
-        &["view", "--headless", "--screenshot", s(&headless)][..],
-        &SMALL,
-        &keys,
-    ]
-    .concat());
-    assert!(r.status.success());
-    let diff = lgh(&["diff", s(&window), s(&headless), "--json"]);
-    let v: serde_json::Value = serde_json::from_slice(&diff.stdout).unwrap();
-    assert!(v["flip"].as_f64().unwrap() <= 0.01, "{v}");
+    let devices: &[&str] = if cfg!(gpu_adapter) {
+        &["cpu", "gpu"]
+    } else {
+        &["cpu"]
+    };
+    for device in devices {
+        let window = d.join(format!("w-{device}.png"));
+        let headless = d.join(format!("h-{device}.png"));
+        let keys = ["--keys", "w,m,l,i", "--device", device];
+        let bin = env!("CARGO_BIN_EXE_lgh");
+        let args = [
+            &["-a", bin, "view", "--screenshot", s(&window)][..],
+            &SMALL,
+            &keys,
+        ]
+        .concat();
+        let r = std::process::Command::new("xvfb-run")
+            .args(&args)
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let r = lgh(&[
+            &["view", "--headless", "--screenshot", s(&headless)][..],
+            &SMALL,
+            &keys,
+        ]
+        .concat());
+        assert!(r.status.success());
+        let diff = lgh(&["diff", s(&window), s(&headless), "--json"]);
+        let v: serde_json::Value = serde_json::from_slice(&diff.stdout).unwrap();
+        assert!(v["flip"].as_f64().unwrap() <= 0.01, "{device}: {v}");
+    }
     let _ = std::fs::remove_dir_all(&d);
 }
