@@ -7,10 +7,10 @@ use anyhow::Result;
 use clap::Args;
 use lgh_core::timing::Timings;
 use lgh_render::methods::MethodInputs;
-use lgh_render::methods::lgh::{LghSettings, LghStats, render_lgh};
+use lgh_render::methods::lgh::{LGH, LGH_UNSHADOWED, LghSettings, LghStats};
 use lgh_render::passes::gbuffer::GBuffer;
 use lgh_render::passes::vpl_gen::{PathNumbers, generate_vpls};
-use lgh_render::settings::{ShadowSettings, Tiling};
+use lgh_render::settings::{Device, ShadowSettings, Tiling};
 use lgh_render::{FrameMemory, RenderSettings, Silent};
 
 use crate::bench_cmd::median;
@@ -48,6 +48,11 @@ pub struct RenderBenchArgs {
     /// Print Table 3 as a Markdown table, the form of docs/performance.md.
     #[arg(long)]
     pub markdown: bool,
+    /// Where the lighting loop runs: cpu, or gpu (lgh's loop, shadow targets and rays on
+    /// the GPU; "lighting" is then the GPU pass, from its timestamps where the adapter has
+    /// them, and "gpu_transfer" the copies to and from it).
+    #[arg(long, value_enum, default_value_t = Device::Cpu)]
+    pub device: Device,
 }
 
 pub fn run(args: &RenderBenchArgs) -> Result<()> {
@@ -55,6 +60,17 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
         anyhow::bail!("--interleave {n}: expected 1 to 16");
     }
     let threads = args.options.threads()?;
+    let (shadowed, unshadowed, device) = match args.device {
+        Device::Cpu => (LGH, LGH_UNSHADOWED, "cpu".to_owned()),
+        Device::Gpu => {
+            let ctx = lgh_gpu::GpuContext::shared()?;
+            (
+                lgh_gpu::lgh::LGH_GPU,
+                lgh_gpu::lgh::LGH_UNSHADOWED_GPU,
+                ctx.adapter_name(),
+            )
+        }
+    };
     let (name, world) = crate::bench_cmd::open_scene(args.scene.as_deref(), &args.options)?;
     let (w, h) = args.size;
     let frame = world.scene.camera().frame(w, h);
@@ -109,7 +125,8 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
             let mut last = None;
             for _ in 0..args.runs {
                 let start = Instant::now();
-                let out = render_lgh(&inputs, k > 0, &mut memory)?;
+                let method = if k > 0 { shadowed } else { unshadowed };
+                let out = method.get().render(&inputs, &mut memory)?;
                 let total = start.elapsed().as_secs_f64() * 1e3;
                 samples.push((
                     out.timings.clone(),
@@ -136,6 +153,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
                     "representatives_ms": get("representatives"),
                     "shadow_targets_ms": get("shadow_targets"),
                     "shadow_rays_ms": get("shadow_rays"),
+                    "gpu_transfer_ms": get("gpu_transfer"),
                     "interleave_blur_ms": get("interleave_blur"),
                     "shadow_filter_ms": get("shadow_filter"),
                     "composite_ms": get("composite"),
@@ -157,7 +175,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
     if args.options.json {
         println!(
             "{}",
-            serde_json::json!({"scene": name, "width": w, "height": h, "threads": threads, "alpha": args.lgh.alpha, "rows": rows})
+            serde_json::json!({"scene": name, "width": w, "height": h, "threads": threads, "device": device, "alpha": args.lgh.alpha, "rows": rows})
         );
         return Ok(());
     }
@@ -168,7 +186,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
         return Ok(());
     }
     println!(
-        "LGH render times on {name}, {w}x{h}, alpha {}, {threads} threads (ms)",
+        "LGH render times on {name}, {w}x{h}, alpha {}, {threads} threads, lighting loop on {device} (ms)",
         args.lgh.alpha
     );
     println!(

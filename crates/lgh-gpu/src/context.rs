@@ -1,6 +1,9 @@
 //! The adapter, device and queue the GPU passes run on.
 
-use std::sync::OnceLock;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock, PoisonError};
+
+use crate::scene::GpuScene;
 
 /// Why the GPU backend cannot run.
 #[derive(Clone, Debug, thiserror::Error)]
@@ -43,6 +46,11 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// The limits the device was created with (the adapter's own).
     pub limits: wgpu::Limits,
+    /// The scene last uploaded, by [`lgh_render::World::geometry_id`]: frames of one
+    /// scene (the viewer's, a benchmark's) upload it once.
+    scene: Mutex<Option<(u64, Arc<GpuScene>)>>,
+    /// The compute pipelines compiled so far, by kernel name.
+    pipelines: Mutex<HashMap<&'static str, Arc<wgpu::ComputePipeline>>>,
 }
 
 impl GpuContext {
@@ -61,8 +69,11 @@ impl GpuContext {
         .map_err(|_| GpuError::NoAdapter)?;
         let info = adapter.get_info();
         let limits = adapter.limits();
+        // Timestamps where the adapter has them: the passes' times in the statistics.
+        let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lgh"),
+            required_features: features,
             required_limits: limits.clone(),
             ..Default::default()
         }))
@@ -75,6 +86,8 @@ impl GpuContext {
             queue,
             info,
             limits,
+            scene: Mutex::default(),
+            pipelines: Mutex::default(),
         })
     }
 
@@ -127,6 +140,57 @@ impl GpuContext {
             }))
     }
 
+    /// The scene of `world` on the GPU: uploaded on first use and while the world's
+    /// geometry is the one last uploaded, reused.
+    ///
+    /// # Errors
+    /// The scene does not fit the adapter's limits.
+    pub fn scene(&self, world: &lgh_render::World) -> Result<Arc<GpuScene>, GpuError> {
+        let id = world.geometry_id();
+        let mut slot = self.scene.lock().unwrap_or_else(PoisonError::into_inner);
+        if let Some((at, scene)) = slot.as_ref()
+            && *at == id
+        {
+            return Ok(Arc::clone(scene));
+        }
+        let scene = Arc::new(GpuScene::new(self, &world.scene.mesh)?);
+        *slot = Some((id, Arc::clone(&scene)));
+        Ok(scene)
+    }
+
+    /// The compute pipeline of kernel `name` (entry point `main` of the WGSL `source()`),
+    /// compiled on first use.
+    pub fn pipeline(
+        &self,
+        name: &'static str,
+        source: impl FnOnce() -> String,
+    ) -> Arc<wgpu::ComputePipeline> {
+        let mut map = self
+            .pipelines
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        let pipeline = map.entry(name).or_insert_with(|| {
+            let module = self
+                .device
+                .create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(name),
+                    source: wgpu::ShaderSource::Wgsl(source().into()),
+                });
+            Arc::new(
+                self.device
+                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(name),
+                        layout: None,
+                        module: &module,
+                        entry_point: Some("main"),
+                        compilation_options: Default::default(),
+                        cache: None,
+                    }),
+            )
+        });
+        Arc::clone(pipeline)
+    }
+
     /// A uniform buffer holding `value`.
     #[must_use]
     pub fn uniform<T: bytemuck::Pod>(&self, label: &str, value: &T) -> wgpu::Buffer {
@@ -171,6 +235,55 @@ impl GpuContext {
         bind: &wgpu::BindGroup,
         invocations: usize,
     ) -> Result<(), GpuError> {
+        self.run(pipeline, bind, invocations, None)
+    }
+
+    /// [`GpuContext::dispatch`], timed by the GPU's timestamps where the adapter has them:
+    /// the pass's time in milliseconds, or `None` (no timestamp queries).
+    ///
+    /// # Errors
+    /// As [`GpuContext::dispatch`].
+    pub fn dispatch_timed(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        bind: &wgpu::BindGroup,
+        invocations: usize,
+    ) -> Result<Option<f64>, GpuError> {
+        if !self
+            .device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+        {
+            self.dispatch(pipeline, bind, invocations)?;
+            return Ok(None);
+        }
+        let queries = self.device.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some("pass time"),
+            ty: wgpu::QueryType::Timestamp,
+            count: 2,
+        });
+        let resolved = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pass time"),
+            size: 16,
+            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        self.run(pipeline, bind, invocations, Some((&queries, &resolved)))?;
+        let ticks: Vec<u64> = self.read_back(&resolved, 2)?;
+        let ns =
+            ticks[1].saturating_sub(ticks[0]) as f64 * f64::from(self.queue.get_timestamp_period());
+        Ok(Some(ns * 1e-6))
+    }
+
+    /// One compute pass of `pipeline` over `invocations` threads, with its start and end
+    /// timestamps resolved into the buffer of `timed` if given; waits for it.
+    fn run(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        bind: &wgpu::BindGroup,
+        invocations: usize,
+        timed: Option<(&wgpu::QuerySet, &wgpu::Buffer)>,
+    ) -> Result<(), GpuError> {
         let groups = u32::try_from(invocations.div_ceil(64))
             .ok()
             .filter(|&x| x <= self.limits.max_compute_workgroups_per_dimension)
@@ -179,10 +292,20 @@ impl GpuContext {
             })?;
         let mut enc = self.device.create_command_encoder(&Default::default());
         {
-            let mut pass = enc.begin_compute_pass(&Default::default());
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: None,
+                timestamp_writes: timed.map(|(query_set, _)| wgpu::ComputePassTimestampWrites {
+                    query_set,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                }),
+            });
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, bind, &[]);
             pass.dispatch_workgroups(groups, 1, 1);
+        }
+        if let Some((queries, resolved)) = timed {
+            enc.resolve_query_set(queries, 0..2, resolved, 0);
         }
         self.queue.submit([enc.finish()]);
         self.device

@@ -15,7 +15,6 @@ use lgh_render::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
 use lgh_render::settings::RenderError;
 
 use crate::context::{GpuContext, GpuError};
-use crate::scene::GpuScene;
 
 /// Every pixel sums every VPL with an exact shadow ray, on the GPU.
 pub const BRUTE_GPU: Method = Method::new(&GpuBrute { shadowed: true });
@@ -85,15 +84,6 @@ impl IndirectMethod for GpuBrute {
     }
 }
 
-/// The shader's module: the kernel and the BVH traversal it calls.
-fn module(ctx: &GpuContext) -> wgpu::ShaderModule {
-    ctx.device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("brute"),
-            source: wgpu::ShaderSource::Wgsl(source().into()),
-        })
-}
-
 /// The WGSL source of the kernel (with the BVH traversal).
 #[must_use]
 pub fn source() -> String {
@@ -108,7 +98,7 @@ pub fn source() -> String {
 fn render_brute(ctx: &GpuContext, i: &MethodInputs, shadows: bool) -> Result<Vec<Vec4>, GpuError> {
     let (g, vpls) = (i.gbuffer, i.vpls);
     let n = g.len();
-    let scene = GpuScene::new(ctx, &i.world.scene.mesh)?;
+    let scene = ctx.scene(i.world)?;
     let pixels: Vec<[Vec4; 4]> = (0..n)
         .map(|p| {
             [
@@ -137,16 +127,7 @@ fn render_brute(ctx: &GpuContext, i: &MethodInputs, shadows: bool) -> Result<Vec
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let pipeline = ctx
-        .device
-        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("brute"),
-            layout: None,
-            module: &module(ctx),
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+    let pipeline = ctx.pipeline("brute", source);
     let bind = ctx.bind_group(
         &pipeline,
         &[&params, &scene.nodes, &scene.tris, &gbuffer, &vpl_buf, &out],

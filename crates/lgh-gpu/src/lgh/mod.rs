@@ -25,7 +25,6 @@ use lgh_render::settings::RenderError;
 use lgh_render::shading::shadow_pass::ShadowEstimates;
 
 use crate::context::{GpuContext, GpuError};
-use crate::scene::GpuScene;
 
 mod upload;
 
@@ -122,8 +121,9 @@ pub fn source() -> String {
 }
 
 /// The lighting loop of the frame whose inputs are `tables`, on the GPU: A, the overdraw, S
-/// and U of every pixel, with the loop's time ("lighting": upload, loop, shadow rays and
-/// read-back, as the GPU has them in one pass).
+/// and U of every pixel, with the loop's times: "lighting" (the loop with its shadow
+/// targets and rays, one GPU pass; from GPU timestamps where the adapter has them) and
+/// "gpu_transfer" (packing, upload and read-back).
 fn lighting_loop(
     ctx: &GpuContext,
     inputs: &MethodInputs,
@@ -132,7 +132,7 @@ fn lighting_loop(
     let start = Instant::now();
     let g = inputs.gbuffer;
     let n = g.len();
-    let scene = GpuScene::new(ctx, &inputs.world.scene.mesh)?;
+    let scene = ctx.scene(inputs.world)?;
     let packed = Tables::new(g, tables)?;
     let params = Params::new(inputs, tables, &packed)?;
     let buffers = [
@@ -144,21 +144,7 @@ fn lighting_loop(
         ctx.storage("representatives", &packed.reps)?,
         ctx.storage("A, S, U", &vec![Vec4::ZERO; 3 * n])?,
     ];
-    let pipeline = ctx
-        .device
-        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("lgh"),
-            layout: None,
-            module: &ctx
-                .device
-                .create_shader_module(wgpu::ShaderModuleDescriptor {
-                    label: Some("lgh"),
-                    source: wgpu::ShaderSource::Wgsl(source().into()),
-                }),
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+    let pipeline = ctx.pipeline("lgh", source);
     let [params_buf, pixels, lights, lists, words, reps, out] = &buffers;
     let bind = ctx.bind_group(
         &pipeline,
@@ -174,8 +160,11 @@ fn lighting_loop(
             out,
         ],
     );
-    ctx.dispatch(&pipeline, &bind, n)?;
+    let upload_ms = start.elapsed().as_secs_f64() * 1e3;
+    let kernel_ms = ctx.dispatch_timed(&pipeline, &bind, n)?;
+    let read_start = Instant::now();
     let result: Vec<Vec4> = ctx.read_back(out, 3 * n)?;
+    let read_ms = read_start.elapsed().as_secs_f64() * 1e3;
     let k = tables.k as usize;
     let plane = |c: usize| -> Vec<Vec3> {
         if k == 0 && c > 0 {
@@ -184,7 +173,12 @@ fn lighting_loop(
         result.chunks(3).map(|p| p[c].truncate()).collect()
     };
     let mut timings = lgh_core::timing::Timings::default();
-    timings.push("lighting", start.elapsed().as_secs_f64() * 1e3);
+    let total_ms = start.elapsed().as_secs_f64() * 1e3;
+    // The loop's own time from the GPU's timestamps where it has them (the wall time
+    // otherwise); the copies to and from the GPU apart.
+    let loop_ms = kernel_ms.unwrap_or(total_ms - upload_ms - read_ms);
+    timings.push("lighting", loop_ms);
+    timings.push("gpu_transfer", (total_ms - loop_ms).max(0.0));
     Ok(LoopResult {
         a: plane(0),
         overdraw: result.chunks(3).map(|p| p[0].w as u32).collect(),
