@@ -17,6 +17,7 @@
 mod context;
 pub mod scene;
 
+pub mod atrous;
 pub mod brute;
 pub mod lgh;
 pub mod rays;

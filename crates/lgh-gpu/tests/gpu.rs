@@ -15,6 +15,7 @@ fn every_shader_is_valid_wgsl() {
         lgh_gpu::brute::source(),
         lgh_gpu::rays::source(),
         lgh_gpu::lgh::source(),
+        lgh_gpu::atrous::source(),
     ] {
         validate(&source);
     }
@@ -241,5 +242,61 @@ fn gpu_occlusion_agrees_with_the_cpu_tracer() {
             wrong.len(),
             pairs.len()
         );
+    }
+}
+
+/// The GPU's a-trous filter of S and U equals the CPU's (`filter_ratio_pair`) within rel_rmse
+/// 1e-3 (the CPU's exponential is a polynomial good to 1e-4), on noisy estimates over the
+/// G-buffers of the default scene and two-rooms, 5 passes.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn gpu_atrous_equals_the_cpu_filter() {
+    use glam::Vec3;
+    use lgh_render::denoise::atrous::{AtrousParams, filter_ratio_pair};
+    let ctx = lgh_gpu::GpuContext::shared().expect("an adapter");
+    for scene in [None, Some("test/two-rooms.toml")] {
+        let w = world(scene);
+        let (width, height) = (80, 45);
+        let g = lgh_render::passes::gbuffer::GBuffer::render(
+            &w,
+            &w.scene.camera().frame(width, height),
+            width,
+            height,
+        );
+        let mut rng = lgh_core::rng::Rng::new(&[11]);
+        let u: Vec<Vec3> = (0..g.len())
+            .map(|_| Vec3::new(0.2, 0.3, 0.1) + 0.5 * rng.next_f32())
+            .collect();
+        let s: Vec<Vec3> = u
+            .iter()
+            .map(|&u| {
+                u * if rng.next_f32() < 0.6 {
+                    rng.next_f32()
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let params = AtrousParams::lgh_defaults(w.radius);
+        let (cs, cu) = filter_ratio_pair(&s, &u, &g, &params);
+        let (mut gs, mut gu) = (s.clone(), u.clone());
+        lgh_gpu::atrous::filter_ratio_pair(ctx, &mut gs, &mut gu, &g, &params).expect("gpu");
+        let rel_rmse = |a: &[Vec3], b: &[Vec3]| {
+            let num: f64 = a
+                .iter()
+                .zip(b)
+                .map(|(x, y)| f64::from((*x - *y).length_squared()))
+                .sum();
+            let den: f64 = b.iter().map(|y| f64::from(y.length_squared())).sum();
+            (num / den).sqrt()
+        };
+        let (es, eu) = (rel_rmse(&gs, &cs), rel_rmse(&gu, &cu));
+        eprintln!("{scene:?}: S {es:e}, U {eu:e}");
+        assert!(es <= 1e-3 && eu <= 1e-3, "{scene:?}: S {es}, U {eu}");
+        // The filter did something: the noisy S changed.
+        assert!(rel_rmse(&gs, &s) > 0.05);
     }
 }

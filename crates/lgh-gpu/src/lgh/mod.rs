@@ -14,6 +14,7 @@
 use std::time::Instant;
 
 use glam::{Vec3, Vec4};
+use lgh_render::denoise::atrous::AtrousParams;
 use lgh_render::memory::FrameMemory;
 use lgh_render::methods::lgh::settings::Selection;
 use lgh_render::methods::lgh::tables::LghTables;
@@ -21,6 +22,7 @@ use lgh_render::methods::lgh::{
     DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt, LghFrame, LoopResult, Prepared, ShadowTarget,
 };
 use lgh_render::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
+use lgh_render::passes::gbuffer::GBuffer;
 use lgh_render::settings::RenderError;
 use lgh_render::shading::shadow_pass::ShadowEstimates;
 
@@ -81,8 +83,16 @@ impl IndirectMethod for GpuLgh {
         let fail = |e: GpuError| RenderError::Backend(e.to_string());
         let ctx = GpuContext::shared().map_err(fail)?;
         let shaded = lighting_loop(ctx, inputs, &tables).map_err(fail)?;
-        Ok(frame.finish(inputs, shaded, memory))
+        Ok(frame.finish_with(inputs, shaded, memory, Some(gpu_atrous)))
     }
+}
+
+/// The ratio estimator's a-trous filter on the GPU ([`crate::atrous`]); false (the CPU's
+/// filter then runs) if the GPU fails.
+fn gpu_atrous(s: &mut [Vec3], u: &mut [Vec3], g: &GBuffer, params: &AtrousParams) -> bool {
+    GpuContext::shared()
+        .and_then(|ctx| crate::atrous::filter_ratio_pair(ctx, s, u, g, params))
+        .is_ok()
 }
 
 /// Refuses the settings whose shadow estimate the GPU loop does not run yet (it runs the

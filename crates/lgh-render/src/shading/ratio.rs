@@ -126,6 +126,27 @@ pub fn shadowed_indirect(
     t: &mut Timings,
     memory: &mut FrameMemory,
 ) -> Shadowed {
+    shadowed_indirect_with(world, g, a, estimates, settings, t, memory, None)
+}
+
+/// An a-trous filter of S and U run elsewhere (lgh-gpu's): filters them in place as
+/// [`filter_ratio_pair_in_place`] does and returns true, or returns false (the GPU failed)
+/// and leaves them to the CPU's filter.
+pub type AtrousBackend = fn(&mut [Vec3], &mut [Vec3], &GBuffer, &AtrousParams) -> bool;
+
+/// [`shadowed_indirect`] with the a-trous filter of `atrous` where given.
+#[must_use]
+#[allow(clippy::too_many_arguments)]
+pub fn shadowed_indirect_with(
+    world: &World,
+    g: &GBuffer,
+    a: Vec<Vec3>,
+    estimates: ShadowEstimates,
+    settings: &RatioFilter,
+    t: &mut Timings,
+    memory: &mut FrameMemory,
+    atrous: Option<AtrousBackend>,
+) -> Shadowed {
     let n_px = g.len();
     if estimates.k == 0 {
         let a = match &settings.interleave_blur {
@@ -174,7 +195,9 @@ pub fn shadowed_indirect(
                 ..AtrousParams::lgh_defaults(world.radius)
             };
             let (mut s, mut u) = (s_hat, u_hat);
-            filter_ratio_pair_in_place(&mut s, &mut u, g, &params, &mut memory.filter);
+            if !atrous.is_some_and(|f| f(&mut s, &mut u, g, &params)) {
+                filter_ratio_pair_in_place(&mut s, &mut u, g, &params, &mut memory.filter);
+            }
             (s, u)
         } else {
             (s_hat, u_hat)

@@ -52,7 +52,10 @@ impl AtrousParams {
 
 const H1: [f32; 5] = [1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
 
-fn ratio(s: Vec3, u: Vec3) -> f32 {
+/// The filter's guide of a pixel with estimates S and U: lum(S) / lum(U) clamped to [0, 1],
+/// 1 where U has no luminance.
+#[must_use]
+pub fn filter_guide(s: Vec3, u: Vec3) -> f32 {
     let lu = luminance(u);
     if lu > 1e-12 {
         (luminance(s) / lu).clamp(0.0, 1.0)
@@ -249,7 +252,7 @@ pub fn filter_ratio_pair_in_place(
                 g.normal[p].to_array(),
                 [1.0, s[p].x, s[p].y],
                 [s[p].z, u[p].x, u[p].y],
-                [u[p].z, ratio(s[p], u[p]), 0.0],
+                [u[p].z, filter_guide(s[p], u[p]), 0.0],
             ];
             // Planes in order: position, normal, hit (fixed), then S, U, guide.
             for (k, &v) in values.as_flattened()[..14].iter().enumerate() {
@@ -584,7 +587,7 @@ fn sum_row<'a>(
             for (k, v) in sv.to_array().into_iter().chain(uv.to_array()).enumerate() {
                 out[k][at + x] = v;
             }
-            out[6][at + x] = ratio(sv, uv);
+            out[6][at + x] = filter_guide(sv, uv);
         }
     }
 }

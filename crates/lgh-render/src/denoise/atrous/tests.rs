@@ -28,7 +28,7 @@ fn reference(s: &[Vec3], u: &[Vec3], g: &GBuffer, p: &AtrousParams) -> (Vec<Vec3
                         if !g.is_hit(q) {
                             continue;
                         }
-                        let dc = ratio(s[i], u[i]) - ratio(s[q], u[q]);
+                        let dc = filter_guide(s[i], u[i]) - filter_guide(s[q], u[q]);
                         let e = dc * dc * inv_c
                             + (g.normal[i] - g.normal[q]).length_squared() / p.n_phi
                             + (g.position[i] - g.position[q]).length_squared() / p.p_phi;

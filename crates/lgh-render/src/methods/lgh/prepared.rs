@@ -25,7 +25,9 @@ use crate::memory::FrameMemory;
 use crate::methods::lgh::light_batch::PackedLight;
 use crate::methods::{MethodInputs, MethodOutput};
 use crate::passes::par_filled;
-use crate::shading::ratio::{RATIO_CORRECTION, RATIO_VISIBILITY, RatioFilter, shadowed_indirect};
+use crate::shading::ratio::{
+    AtrousBackend, RATIO_CORRECTION, RATIO_VISIBILITY, RatioFilter, shadowed_indirect_with,
+};
 use crate::shading::reservoirs::ReservoirLayout;
 use crate::shading::shadow_pass::{ShadowEstimates, ShadowPass, Targets};
 use crate::shading::tiles::{AllBounds, InterleavedBins};
@@ -278,6 +280,18 @@ impl LghFrame {
         shaded: LoopResult,
         memory: &mut FrameMemory,
     ) -> MethodOutput {
+        self.finish_with(inputs, shaded, memory, None)
+    }
+
+    /// [`LghFrame::finish`] with the a-trous filter of `atrous` where given (the GPU's).
+    #[must_use]
+    pub fn finish_with(
+        self,
+        inputs: &MethodInputs,
+        shaded: LoopResult,
+        memory: &mut FrameMemory,
+        atrous: Option<AtrousBackend>,
+    ) -> MethodOutput {
         let Self {
             mut stats,
             timings: mut t,
@@ -309,7 +323,8 @@ impl LghFrame {
             },
             ..all.ratio_filter(n)
         };
-        let shadowed = shadowed_indirect(world, g, a, estimates, &filter, &mut t, memory);
+        let shadowed =
+            shadowed_indirect_with(world, g, a, estimates, &filter, &mut t, memory, atrous);
         stats.shadow_rays = shadowed.rays;
         MethodOutput {
             radiance: shadowed.indirect,

@@ -1,0 +1,88 @@
+//! The a-trous filter of the ratio estimator on the GPU (`shaders/atrous.wgsl`): S and U
+//! filtered with one set of edge-stopping weights, pass after pass (lgh-render's
+//! `denoise::atrous::filter_ratio_pair`, the same taps, weights and cut-off), one dispatch a
+//! pass between two buffers.
+
+use glam::{Vec3, Vec4};
+use lgh_render::denoise::atrous::{AtrousParams, filter_guide};
+use lgh_render::passes::gbuffer::GBuffer;
+
+use crate::context::{GpuContext, GpuError};
+
+/// `Params` of the shader.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    width: u32,
+    height: u32,
+    step: u32,
+    _pad: u32,
+    inv_c: f32,
+    inv_n: f32,
+    inv_p: f32,
+    _pad2: f32,
+}
+
+/// The WGSL source of the kernel.
+#[must_use]
+pub fn source() -> String {
+    include_str!("../shaders/atrous.wgsl").to_owned()
+}
+
+/// Filters `s` and `u` (per pixel of `g`) in place with `params`, on the GPU; pixels that see
+/// nothing keep their values.
+///
+/// # Errors
+/// The image exceeds the adapter's limits, or the GPU failed.
+pub fn filter_ratio_pair(
+    ctx: &GpuContext,
+    s: &mut [Vec3],
+    u: &mut [Vec3],
+    g: &GBuffer,
+    params: &AtrousParams,
+) -> Result<(), GpuError> {
+    let n = g.len();
+    let passes = params.passes.min(12);
+    if passes == 0 || n == 0 {
+        return Ok(());
+    }
+    let geo: Vec<Vec4> = (0..n)
+        .flat_map(|p| {
+            let hit = if g.is_hit(p) { 1.0 } else { 0.0 };
+            [g.position[p].extend(hit), g.normal[p].extend(0.0)]
+        })
+        .collect();
+    let values: Vec<Vec4> = (0..n)
+        .flat_map(|p| [s[p].extend(filter_guide(s[p], u[p])), u[p].extend(0.0)])
+        .collect();
+    let geo = ctx.storage("a-trous geometry", &geo)?;
+    let buffers = [
+        ctx.storage("a-trous S, U", &values)?,
+        ctx.storage("a-trous S, U (next)", &values)?,
+    ];
+    let pipeline = ctx.pipeline("atrous", source);
+    for pass in 0..passes {
+        let uniform = ctx.uniform(
+            "a-trous pass",
+            &Params {
+                width: g.width,
+                height: g.height,
+                step: 1 << pass,
+                _pad: 0,
+                inv_c: 4f32.powi(pass as i32) / params.c_phi,
+                inv_n: 1.0 / params.n_phi,
+                inv_p: 1.0 / params.p_phi,
+                _pad2: 0.0,
+            },
+        );
+        let (from, to) = (&buffers[pass as usize % 2], &buffers[1 - pass as usize % 2]);
+        let bind = ctx.bind_group(&pipeline, &[&uniform, &geo, from, to]);
+        ctx.dispatch(&pipeline, &bind, n)?;
+    }
+    let out: Vec<Vec4> = ctx.read_back(&buffers[passes as usize % 2], 2 * n)?;
+    for (p, pair) in out.chunks(2).enumerate() {
+        s[p] = pair[0].truncate();
+        u[p] = pair[1].truncate();
+    }
+    Ok(())
+}
