@@ -143,7 +143,7 @@ fn view(mut args: lgh_view::ViewArgs) -> anyhow::Result<()> {
     let scene = scene_arg::load_scene(Some(args.scene.as_ref().unwrap_or(&default)))?;
     // The viewer holds two frames (the accumulated or filtered history beside the new one).
     let estimate = lgh_render::budget::MemoryEstimate::new(&scene, &args.render_settings(), 2);
-    sysmem::check(&estimate, None)?;
+    sysmem::check(&estimate, args.max_memory)?;
     if args.headless {
         lgh_view::headless::run(&args, scene)
     } else {

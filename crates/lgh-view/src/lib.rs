@@ -78,6 +78,10 @@ pub struct ViewArgs {
     /// Worker threads (0 = one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
+    /// Refuse views estimated to need more memory than this (e.g. 8G, 512MB, 2GiB).
+    /// Default: the memory the system has available.
+    #[arg(long, value_parser = lgh_render::budget::parse_bytes)]
+    pub max_memory: Option<u64>,
     /// Where the indirect light is computed: cpu, or gpu (the passes `lgh render --device
     /// gpu` runs there; a method not ported yet, cycled to with M, runs on the CPU and the
     /// readout says so).

@@ -192,6 +192,24 @@ fn negative_and_absurd_values_get_the_limit_in_the_message() {
         &lgh(&["render", "--max-memory", "lots", "--out", o]),
         &["lots"],
     );
+    // The viewer has the same limit, which its advice names.
+    assert_error(
+        &lgh(&[
+            "view",
+            "--headless",
+            "--frames",
+            "1",
+            "--size",
+            "4000x4000",
+            "--max-memory",
+            "100MB",
+        ]),
+        &[
+            "needs about",
+            "more than --max-memory (100 MB)",
+            "raise --max-memory",
+        ],
+    );
     assert!(!out.exists());
     let _ = std::fs::remove_dir_all(&d);
 }

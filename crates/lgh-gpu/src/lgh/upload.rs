@@ -38,10 +38,12 @@ pub(super) struct Params {
     k: u32,
     hierarchies: u32,
     list_lights: u32,
+    order: u32,
     eps2: f32,
     ray_eps: f32,
     seed_lo: u32,
     seed_hi: u32,
+    _pad: [u32; 3],
     hier: [Hier; MAX_HIERARCHIES],
 }
 
@@ -52,7 +54,8 @@ pub(super) struct Tables {
     /// Per shaded light: position and reach^2, normal and isotropic share, intensity and
     /// radius, blending floors with level and vertex x.
     pub(super) lights: Vec<[Vec4; 4]>,
-    /// The lists' starts, then their lights.
+    /// The lists' starts, then their lights, then the pixels in the order the invocations
+    /// take them ([`pixel_order`]).
     pub(super) lists: Vec<u32>,
     /// Per hierarchy: vertex-row starts of levels 1..=l_max, descent starts, descent
     /// children as (child, bits of the running sum).
@@ -99,6 +102,10 @@ impl Tables {
             .collect();
         let mut lists = t.bins.offsets.clone();
         lists.extend_from_slice(&t.bins.lights);
+        lists.extend(pixel_order(
+            &t.bins.list,
+            t.bins.offsets.len().saturating_sub(1),
+        ));
         let (mut words, mut reps, mut hier) = (Vec::new(), Vec::new(), Vec::new());
         for h in &t.hierarchies {
             let grid = h.grid;
@@ -160,6 +167,7 @@ impl Tables {
 impl Params {
     /// The uniform of a frame with inputs `i`, loop inputs `t` and packed tables `p`.
     pub(super) fn new(i: &MethodInputs, t: &LghTables, p: &Tables) -> Result<Self, GpuError> {
+        let order = (t.bins.offsets.len() + t.bins.lights.len()) as u32;
         let mut hier = [Hier::default(); MAX_HIERARCHIES];
         hier[..p.hier.len()].copy_from_slice(&p.hier);
         let seed = i.settings.seed;
@@ -169,11 +177,35 @@ impl Params {
             k: t.k,
             hierarchies: p.hier.len() as u32,
             list_lights: t.bins.offsets.len() as u32,
+            order,
             eps2: t.eps2,
             ray_eps: i.world.ray_epsilon,
             seed_lo: seed as u32,
             seed_hi: (seed >> 32) as u32,
+            _pad: [0; 3],
             hier,
         })
     }
+}
+
+/// The pixels sorted by their light list (a counting sort, stable): consecutive invocations,
+/// and so the threads of a workgroup, shade pixels of one (sub-image, tile) and read the
+/// same lights, instead of a row's pixels cycling through n^2 sub-images and several tiles.
+/// Each pixel's result depends on its own index only, so the order changes no value.
+fn pixel_order(list: &[u32], lists: usize) -> Vec<u32> {
+    let mut start = vec![0u32; lists + 1];
+    for &l in list {
+        start[(l as usize).min(lists)] += 1;
+    }
+    let mut at = 0;
+    for s in &mut start {
+        (*s, at) = (at, at + *s);
+    }
+    let mut order = vec![0u32; list.len()];
+    for (p, &l) in list.iter().enumerate() {
+        let slot = &mut start[(l as usize).min(lists)];
+        order[*slot as usize] = p as u32;
+        *slot += 1;
+    }
+    order
 }

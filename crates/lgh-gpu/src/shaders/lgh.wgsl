@@ -35,10 +35,15 @@ struct Params {
     k: u32,
     hierarchies: u32,
     list_lights: u32,
+    // Where the pixel order starts in `lists`: invocation i shades pixel lists[order + i].
+    order: u32,
     eps2: f32,
     ray_eps: f32,
     seed_lo: u32,
     seed_hi: u32,
+    _p0: u32,
+    _p1: u32,
+    _p2: u32,
     hier: array<Hier, 8>,
 }
 
@@ -64,7 +69,8 @@ struct Light {
 @group(0) @binding(2) var<storage, read> tris: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> gbuffer: array<Pixel>;
 @group(0) @binding(4) var<storage, read> lights: array<Light>;
-// The lists' starts, then their lights (from params.list_lights).
+// The lists' starts, then their lights (from params.list_lights), then the pixels sorted by
+// list (from params.order), so that a workgroup's threads read the same lights.
 @group(0) @binding(5) var<storage, read> lists: array<u32>;
 // Vertex-row starts, descent starts, then descent children as (child, bits of running sum).
 @group(0) @binding(6) var<storage, read> words: array<u32>;
@@ -305,10 +311,10 @@ fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f3
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
-    if (i >= params.pixels) {
+    if (id.x >= params.pixels) {
         return;
     }
+    let i = lists[params.order + id.x];
     let px = gbuffer[i];
     if (px.position.w == 0.0) {
         out[3u * i] = vec4<f32>(0.0);
