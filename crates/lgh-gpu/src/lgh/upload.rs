@@ -2,7 +2,6 @@
 //! `shaders/lgh.wgsl`.
 
 use glam::Vec4;
-use lgh_core::lighting_grid::representative::SLOTS;
 use lgh_render::methods::MethodInputs;
 use lgh_render::methods::lgh::tables::LghTables;
 use lgh_render::passes::gbuffer::GBuffer;
@@ -27,7 +26,8 @@ pub(super) struct Hier {
     starts_base: u32,
     children_base: u32,
     reps_base: u32,
-    _pad: [u32; 3],
+    vpl_base: u32,
+    _pad: [u32; 2],
 }
 
 /// `Params` of the shader.
@@ -58,9 +58,10 @@ pub(super) struct Tables {
     /// take them ([`pixel_order`]).
     pub(super) lists: Vec<u32>,
     /// Per hierarchy: vertex-row starts of levels 1..=l_max, descent starts, descent
-    /// children as (child, bits of the running sum).
+    /// children as (child, bits of the running sum), and per S_1 light its [`SLOTS`]
+    /// representatives as indices into the hierarchy's VPLs.
     pub(super) words: Vec<u32>,
-    /// Per S_1 light, [`SLOTS`] x (position, normal, colour).
+    /// Per hierarchy, its VPLs: position, normal, flux colour.
     pub(super) reps: Vec<Vec4>,
     /// Each hierarchy's place in `words` and `reps`.
     hier: Vec<Hier>,
@@ -124,15 +125,17 @@ impl Tables {
             for &(c, sum) in h.descent_children {
                 words.extend_from_slice(&[c, sum.to_bits()]);
             }
-            let reps_base = reps.len() as u32;
-            for set in &h.reps {
-                for slot in set {
-                    reps.extend_from_slice(&[
-                        slot.position.extend(0.0),
-                        slot.normal.extend(0.0),
-                        slot.colour.extend(0.0),
-                    ]);
-                }
+            let reps_base = words.len() as u32;
+            for slots in &grid.rep_vpls {
+                words.extend_from_slice(slots);
+            }
+            let vpl_base = (reps.len() / 3) as u32;
+            for v in &grid.vpls {
+                reps.extend_from_slice(&[
+                    v.position.extend(0.0),
+                    v.normal.extend(0.0),
+                    v.colour.extend(0.0),
+                ]);
             }
             hier.push(Hier {
                 first: h.first,
@@ -146,10 +149,10 @@ impl Tables {
                 starts_base,
                 children_base,
                 reps_base,
-                _pad: [0; 3],
+                vpl_base,
+                _pad: [0; 2],
             });
         }
-        debug_assert_eq!(reps.len() % (3 * SLOTS), 0);
         if words.len() > u32::MAX as usize / 2 || reps.len() > u32::MAX as usize / 2 {
             return Err(GpuError::TooLarge("hierarchy tables".into()));
         }

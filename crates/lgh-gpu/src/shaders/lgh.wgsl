@@ -10,7 +10,8 @@
 
 const PI: f32 = 3.14159265358979;
 const SLOTS: u32 = 16u;
-const MAX_HIERARCHIES: u32 = 8u;
+// An empty representative slot.
+const EMPTY_SLOT: u32 = 0xffffffffu;
 
 // One hierarchy's tables (lgh-render's tables::HierarchyTables).
 struct Hier {
@@ -25,9 +26,9 @@ struct Hier {
     starts_base: u32,
     children_base: u32,
     reps_base: u32,
+    vpl_base: u32,
     _p0: u32,
     _p1: u32,
-    _p2: u32,
 }
 
 struct Params {
@@ -72,9 +73,10 @@ struct Light {
 // The lists' starts, then their lights (from params.list_lights), then the pixels sorted by
 // list (from params.order), so that a workgroup's threads read the same lights.
 @group(0) @binding(5) var<storage, read> lists: array<u32>;
-// Vertex-row starts, descent starts, then descent children as (child, bits of running sum).
+// Per hierarchy: vertex-row starts, descent starts, descent children as (child, bits of the
+// running sum), then per S_1 light its SLOTS representatives (indices into its VPLs).
 @group(0) @binding(6) var<storage, read> words: array<u32>;
-// Per S_1 light, SLOTS x (position, normal, colour).
+// Per hierarchy, its VPLs: position, normal, flux colour.
 @group(0) @binding(7) var<storage, read> reps: array<vec4<f32>>;
 // Per pixel: A (w: overdraw), S (w: rays traced), U.
 @group(0) @binding(8) var<storage, read_write> out: array<vec4<f32>>;
@@ -260,12 +262,17 @@ fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f3
         mean_rho = rep_weight(x, n, q, nq);
     } else {
         let s1 = walk(h, j - h.grid_base);
-        let base = h.reps_base + 3u * SLOTS * s1;
+        let base = h.reps_base + SLOTS * s1;
         var w: array<f32, 16>;
         var total = 0.0;
         for (var s = 0u; s < SLOTS; s++) {
-            w[s] = rep_weight(x, n, reps[base + 3u * s].xyz, reps[base + 3u * s + 1u].xyz);
-            total += w[s];
+            let v = words[base + s];
+            w[s] = 0.0;
+            if (v != EMPTY_SLOT) {
+                let r = 3u * (h.vpl_base + v);
+                w[s] = rep_weight(x, n, reps[r].xyz, reps[r + 1u].xyz);
+                total += w[s];
+            }
         }
         if (!(total > 0.0)) {
             return vec4<f32>(0.0);
@@ -279,11 +286,20 @@ fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f3
             }
             t -= w[s];
         }
-        q = reps[base + 3u * pick].xyz;
-        nq = reps[base + 3u * pick + 1u].xyz;
+        // Rounding can leave t beyond the weights: the last slot with a weight.
+        if (w[pick] <= 0.0) {
+            for (var s = 0u; s < SLOTS; s++) {
+                if (w[s] > 0.0) {
+                    pick = s;
+                }
+            }
+        }
+        let r = 3u * (h.vpl_base + words[base + pick]);
+        q = reps[r].xyz;
+        nq = reps[r + 1u].xyz;
         let lum_c = luminance(c);
         let chroma = select(vec3<f32>(0.0), c / lum_c, lum_c > 0.0);
-        colour = select(vec3<f32>(0.0), reps[base + 3u * pick + 2u].xyz / chroma, chroma > vec3<f32>(0.0));
+        colour = select(vec3<f32>(0.0), reps[r + 2u].xyz / chroma, chroma > vec3<f32>(0.0));
         mean_rho = total / f32(SLOTS);
     }
     if (!(mean_rho > 0.0)) {

@@ -67,7 +67,7 @@ pub(super) struct ShadeLights {
 /// light, and the S_1 lights' representatives (with their VPLs' colours).
 pub(super) struct Hierarchy {
     /// The representatives of its S_1 lights (by grid index).
-    pub(super) reps: Vec<RepSet>,
+    reps: Vec<RepSet>,
     partition: Partition,
     pub(super) descent: Descent,
     /// Index in [`ShadeLights`] of the hierarchy's first light.
@@ -86,7 +86,7 @@ pub(super) struct Hierarchy {
 /// for each such read, and those lines sit next to the ones the weights have just read.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(align(64))]
-pub(super) struct RepSet {
+struct RepSet {
     position: [[f32; SLOTS]; 3],
     normal: [[f32; SLOTS]; 3],
     colour: [[f32; SLOTS]; 3],
@@ -94,7 +94,7 @@ pub(super) struct RepSet {
 
 impl RepSet {
     /// Slot `s`: position and normal.
-    pub(super) fn get(&self, s: usize) -> (Vec3, Vec3) {
+    fn get(&self, s: usize) -> (Vec3, Vec3) {
         let [px, py, pz] = self.position;
         let [nx, ny, nz] = self.normal;
         (
@@ -104,7 +104,7 @@ impl RepSet {
     }
 
     /// The flux colour of slot `s`.
-    pub(super) fn colour(&self, s: usize) -> Vec3 {
+    fn colour(&self, s: usize) -> Vec3 {
         let [r, g, b] = &self.colour;
         Vec3::new(r[s], g[s], b[s])
     }
@@ -255,7 +255,11 @@ impl ShadeLights {
         tables: bool,
     ) {
         // S_1 only: the draw below a coarser light is made afresh per sample.
-        let reps = s1_representatives(grid, &vpls.as_input(), seed, |s| RepSet::of(s, vpls));
+        // With tables, the slots' VPL indices too (the GPU reads the VPLs by index).
+        let both = s1_representatives(grid, &vpls.as_input(), seed, |s| {
+            (RepSet::of(s, vpls), tables.then_some(*s))
+        });
+        let (reps, slots): (Vec<RepSet>, Vec<Option<[u32; SLOTS]>>) = both.into_iter().unzip();
         let rows = VertexRows::new(grid);
         let vpl_lights = if levels.lowest == 0 { vpls.len() } else { 0 };
         self.hierarchies.push(Hierarchy {
@@ -264,7 +268,8 @@ impl ShadeLights {
             descent: Descent::new(VertexLookup::new(grid, &rows)),
             first,
             grid_base: first + vpl_lights,
-            tables: tables.then(|| GridTables::new(grid, levels)),
+            tables: tables
+                .then(|| GridTables::new(grid, levels, slots.into_iter().flatten(), vpls)),
         });
     }
 
@@ -543,7 +548,7 @@ fn pick_weighted(weights: &[f32; SLOTS], total: f32, u: f32) -> usize {
 
 /// An RGB value divided by its luminance (its colour at unit luminance); zero for a value
 /// without luminance.
-fn chroma(c: Vec3) -> Vec3 {
+pub(super) fn chroma(c: Vec3) -> Vec3 {
     let lum = luminance(c);
     if lum > 0.0 { c / lum } else { Vec3::ZERO }
 }

@@ -11,13 +11,17 @@ use lgh_core::lighting_grid::lookup::row_starts;
 use lgh_core::lighting_grid::partition::ShadedLevels;
 use lgh_core::lighting_grid::representative::SLOTS;
 
+use lgh_core::vpl::Vpls;
+
 use super::LghFrame;
 use super::light_batch::PackedLight;
+use super::lights::chroma;
 use crate::shading::tiles::FlatBins;
 
 /// One hierarchy's grid as flat tables: its geometry and shaded levels, the x coordinate
-/// of every grid light's vertex, and per level l >= 1 where each vertex row starts
-/// ([`row_starts`]): a vertex's light is found in its row by its x.
+/// of every grid light's vertex, per level l >= 1 where each vertex row starts
+/// ([`row_starts`]: a vertex's light is found in its row by its x), the representatives of
+/// its S_1 lights as indices into its VPLs, and those VPLs.
 #[derive(Clone, Debug)]
 pub struct GridTables {
     /// The grid's geometry (origin, top cell size, l_max).
@@ -28,28 +32,47 @@ pub struct GridTables {
     pub vertex_x: Vec<u32>,
     /// Per level l = 1..=l_max (index l - 1), the row starts.
     pub rows: Vec<Vec<u32>>,
+    /// Per S_1 light (by grid index), its [`SLOTS`] representatives: indices into `vpls`,
+    /// [`lgh_core::lighting_grid::representative::NONE`] for an empty slot.
+    pub rep_vpls: Vec<[u32; SLOTS]>,
+    /// The VPLs the hierarchy was built from.
+    pub vpls: Vec<RepSlot>,
 }
 
 impl GridTables {
-    /// The tables of `grid`, shaded at `levels`.
+    /// The tables of `grid`, built from `vpls` and shaded at `levels`, with its S_1
+    /// lights' representatives `rep_vpls`.
     #[must_use]
-    pub(super) fn new(grid: &LightingGrid, levels: ShadedLevels) -> Self {
+    pub(super) fn new(
+        grid: &LightingGrid,
+        levels: ShadedLevels,
+        rep_vpls: impl Iterator<Item = [u32; SLOTS]>,
+        vpls: &Vpls,
+    ) -> Self {
         Self {
             geometry: grid.geometry,
             levels,
             vertex_x: grid.vertex.iter().map(|v| v.x).collect(),
             rows: (1..=grid.l_max()).map(|l| row_starts(grid, l)).collect(),
+            rep_vpls: rep_vpls.collect(),
+            vpls: (0..vpls.len())
+                .map(|i| RepSlot {
+                    position: vpls.positions[i],
+                    normal: vpls.normals[i],
+                    colour: chroma(vpls.flux[i]),
+                })
+                .collect(),
         }
     }
 }
 
-/// One representative VPL of an S_1 light: position, normal and the colour of its flux
-/// (at unit luminance).
+/// A VPL as the unbiased estimate's targets read it: position, normal and the colour of its
+/// flux (at unit luminance).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RepSlot {
     /// Position.
     pub position: Vec3,
-    /// Normal (zero for an empty slot).
+    /// Normal.
     pub normal: Vec3,
     /// Flux colour.
     pub colour: Vec3,
@@ -62,14 +85,12 @@ pub struct HierarchyTables<'a> {
     pub first: u32,
     /// Index among the shaded lights of its grid light 0 (after its VPLs if they are shaded).
     pub grid_base: u32,
-    /// Its grid.
+    /// Its grid, representatives and VPLs.
     pub grid: &'a GridTables,
     /// Light j's children are `children[starts[j]..starts[j + 1]]` (grid indices).
     pub descent_starts: &'a [u32],
     /// (child, running sum of the weights).
     pub descent_children: &'a [(u32, f32)],
-    /// The [`SLOTS`] representatives of every S_1 light, by grid index.
-    pub reps: Vec<[RepSlot; SLOTS]>,
 }
 
 /// The lighting loop's inputs of one frame ([`LghFrame::tables`]).
@@ -98,27 +119,12 @@ impl LghFrame {
         let mut hierarchies = Vec::new();
         for h in &self.lights.hierarchies {
             let (descent_starts, descent_children) = h.descent.tables();
-            let reps = h
-                .reps
-                .iter()
-                .map(|set| {
-                    std::array::from_fn(|s| {
-                        let (position, normal) = set.get(s);
-                        RepSlot {
-                            position,
-                            normal,
-                            colour: set.colour(s),
-                        }
-                    })
-                })
-                .collect();
             hierarchies.push(HierarchyTables {
                 first: h.first as u32,
                 grid_base: h.grid_base as u32,
                 grid: h.tables.as_ref()?,
                 descent_starts,
                 descent_children,
-                reps,
             });
         }
         Some(LghTables {
