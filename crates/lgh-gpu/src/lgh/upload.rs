@@ -5,6 +5,7 @@ use glam::Vec4;
 use lgh_render::methods::MethodInputs;
 use lgh_render::methods::lgh::tables::LghTables;
 use lgh_render::passes::gbuffer::GBuffer;
+use rayon::prelude::*;
 
 use crate::context::GpuError;
 
@@ -77,6 +78,7 @@ impl Tables {
             )));
         }
         let pixels = (0..g.len())
+            .into_par_iter()
             .map(|p| {
                 [
                     g.position[p].extend(if g.is_hit(p) { 1.0 } else { 0.0 }),
@@ -88,7 +90,7 @@ impl Tables {
             .collect();
         let mut lights: Vec<[Vec4; 4]> = t
             .lights
-            .iter()
+            .par_iter()
             .map(|l| {
                 let (rise, fall) = l.role.floors();
                 // The top level's infinite reach as the largest float: the shader compares.
@@ -110,10 +112,11 @@ impl Tables {
         let (mut words, mut reps, mut hier) = (Vec::new(), Vec::new(), Vec::new());
         for h in &t.hierarchies {
             let grid = h.grid;
-            for (g_index, &x) in grid.vertex_x.iter().enumerate() {
-                if let Some(light) = lights.get_mut(h.grid_base as usize + g_index) {
-                    light[3].w = f32::from_bits(x);
-                }
+            if let Some(grid_lights) = lights.get_mut(h.grid_base as usize..) {
+                grid_lights
+                    .par_iter_mut()
+                    .zip(&grid.vertex_x)
+                    .for_each(|(light, &x)| light[3].w = f32::from_bits(x));
             }
             let rows_base = words.len() as u32;
             for rows in &grid.rows {
@@ -130,13 +133,13 @@ impl Tables {
                 words.extend_from_slice(slots);
             }
             let vpl_base = (reps.len() / 3) as u32;
-            for v in &grid.vpls {
-                reps.extend_from_slice(&[
+            reps.par_extend(grid.vpls.par_iter().flat_map_iter(|v| {
+                [
                     v.position.extend(0.0),
                     v.normal.extend(0.0),
                     v.colour.extend(0.0),
-                ]);
-            }
+                ]
+            }));
             hier.push(Hier {
                 first: h.first,
                 grid_base: h.grid_base,
