@@ -164,3 +164,25 @@ fn gpu_lgh_at_the_viewers_settings_matches_the_cpu() {
         );
     }
 }
+
+/// 1M VPLs (the largest case) fit the GPU's buffers even on an adapter whose largest
+/// storage buffer is 128 MB (lavapipe): the representatives go up as indices into the VPLs
+/// (copied slots needed 184 MB). The frame is finite and lit.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn a_million_vpls_fit_the_gpu_buffers() {
+    let w = world(None);
+    let s = RenderSettings {
+        width: 32,
+        height: 18,
+        vpls: 1_000_000,
+        component: Component::Indirect,
+        ..RenderSettings::default()
+    };
+    let image = render(&w, &s, lgh_gpu::lgh::LGH_GPU);
+    let total: f32 = image.pixels.iter().map(|p| p.x + p.y + p.z).sum::<f32>();
+    assert!(total > 0.0);
+}
