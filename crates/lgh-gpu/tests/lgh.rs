@@ -4,7 +4,7 @@
 //! the unshadowed sum A, which has no randomness, pixel by pixel.
 
 use lgh_render::image::ImageFormat;
-use lgh_render::image::metrics::{diff, display_bytes, flip_mean};
+use lgh_render::image::metrics::{DiffMetrics, diff, display_bytes, flip_mean};
 use lgh_render::methods::brute::BRUTE;
 use lgh_render::methods::lgh::{LGH, LGH_UNSHADOWED};
 use lgh_render::{Component, Image, RenderSettings, Silent, World, render_frame};
@@ -27,6 +27,29 @@ fn render(w: &World, settings: &RenderSettings, method: lgh_render::Method) -> I
 fn flip(w: &World, a: &Image, b: &Image) -> f64 {
     let bytes = |i: &Image| display_bytes(i, ImageFormat::Png, w.scene.exposure);
     flip_mean(&bytes(a), &bytes(b), a.width, a.height).expect("flip")
+}
+
+/// CPU `lgh` and GPU `lgh` against the brute force over the same VPLs: their metrics, after
+/// checking that the GPU's FLIP is no more than 1.1x the CPU's + 0.005.
+fn cpu_and_gpu_against_the_brute_force(
+    w: &World,
+    s: &RenderSettings,
+    scene: Option<&str>,
+) -> (DiffMetrics, DiffMetrics) {
+    let brute = render(w, s, BRUTE);
+    let cpu = render(w, s, LGH);
+    let gpu = render(w, s, lgh_gpu::lgh::LGH_GPU);
+    let (mc, mg) = (
+        diff(&cpu, &brute).expect("size"),
+        diff(&gpu, &brute).expect("size"),
+    );
+    let (fc, fg) = (flip(w, &cpu, &brute), flip(w, &gpu, &brute));
+    eprintln!(
+        "{scene:?} seed {}: cpu {mc:?} FLIP {fc:.4}; gpu {mg:?} FLIP {fg:.4}",
+        s.seed
+    );
+    assert!(fg <= 1.1 * fc + 0.005, "{scene:?}: FLIP gpu {fg} cpu {fc}");
+    (mc, mg)
 }
 
 /// Issue 35's check at a size lavapipe and the CPU brute force afford in CI (indirect
@@ -55,16 +78,7 @@ fn gpu_lgh_estimates_the_brute_force_as_the_cpu_lgh_does() {
                 component: Component::Indirect,
                 ..RenderSettings::default()
             };
-            let brute = render(&w, &s, BRUTE);
-            let cpu = render(&w, &s, LGH);
-            let gpu = render(&w, &s, lgh_gpu::lgh::LGH_GPU);
-            let (mc, mg) = (
-                diff(&cpu, &brute).expect("size"),
-                diff(&gpu, &brute).expect("size"),
-            );
-            let (fc, fg) = (flip(&w, &cpu, &brute), flip(&w, &gpu, &brute));
-            eprintln!("{rel:?} seed {seed}: cpu {mc:?} FLIP {fc:.4}; gpu {mg:?} FLIP {fg:.4}");
-            assert!(fg <= 1.1 * fc + 0.005, "{rel:?}: FLIP gpu {fg} cpu {fc}");
+            let (_, mg) = cpu_and_gpu_against_the_brute_force(&w, &s, rel);
             bias += mg.rel_bias / 2.0;
         }
         assert!(bias.abs() <= 0.01, "{rel:?}: gpu rel_bias {bias}");
@@ -145,16 +159,7 @@ fn gpu_lgh_at_the_viewers_settings_matches_the_cpu() {
             s.lgh.alpha = 1.5;
             s.tiling.interleave = Some(4);
             s.shadows.samples = Some(4);
-            let brute = render(&w, &s, BRUTE);
-            let cpu = render(&w, &s, LGH);
-            let gpu = render(&w, &s, lgh_gpu::lgh::LGH_GPU);
-            let (mc, mg) = (
-                diff(&cpu, &brute).expect("size"),
-                diff(&gpu, &brute).expect("size"),
-            );
-            let (fc, fg) = (flip(&w, &cpu, &brute), flip(&w, &gpu, &brute));
-            eprintln!("{rel:?} seed {seed}: cpu {mc:?} FLIP {fc:.4}; gpu {mg:?} FLIP {fg:.4}");
-            assert!(fg <= 1.1 * fc + 0.005, "{rel:?}: FLIP gpu {fg} cpu {fc}");
+            let (mc, mg) = cpu_and_gpu_against_the_brute_force(&w, &s, rel);
             bias_cpu += mc.rel_bias / 4.0;
             bias_gpu += mg.rel_bias / 4.0;
         }
