@@ -137,7 +137,7 @@ fn view(mut args: lgh_view::ViewArgs) -> anyhow::Result<()> {
     if args.device == lgh_render::settings::Device::Gpu {
         let device = lgh_gpu::GpuContext::shared()?.adapter_name();
         eprintln!("GPU: {device}");
-        args.backend = Some(lgh_gpu::gpu_method);
+        args.backend = Some(lgh_gpu::gpu_method_for);
     }
     let default = std::path::PathBuf::from("builtin:cornell-moving-light");
     let scene = scene_arg::load_scene(Some(args.scene.as_ref().unwrap_or(&default)))?;

@@ -25,6 +25,17 @@ pub mod rays;
 pub use context::{GpuContext, GpuError};
 pub use scene::GpuScene;
 
+/// The GPU method for a frame of `settings`: [`gpu_method`] of its method, or `None` where
+/// that method's GPU version does not run these settings (lgh with a shadow estimate other
+/// than the default, [`lgh::supported`]), so that a caller that falls back to the CPU (the
+/// viewer, whose keys change the estimate) renders that frame there.
+#[must_use]
+pub fn gpu_method_for(settings: &lgh_render::RenderSettings) -> Option<lgh_render::Method> {
+    let m = gpu_method(settings.method)?;
+    let lgh = m == lgh::LGH_GPU && settings.shadow_samples() > 0;
+    (!lgh || lgh::supported(&settings.lgh).is_ok()).then_some(m)
+}
+
 /// The GPU method standing for the CPU method `method`, if it has been ported.
 #[must_use]
 pub fn gpu_method(method: lgh_render::Method) -> Option<lgh_render::Method> {

@@ -300,3 +300,23 @@ fn gpu_atrous_equals_the_cpu_filter() {
         assert!(rel_rmse(&gs, &s) > 0.05);
     }
 }
+
+/// The viewer's mapping to GPU methods: lgh at its default estimate goes to the GPU; with a
+/// shadow estimate the GPU loop does not run (the viewer's U key: the paper's), or a method
+/// not ported, the frame stays on the CPU (`None`); without shadow samples any estimate runs.
+#[test]
+fn frames_map_to_gpu_methods_where_the_gpu_runs_their_settings() {
+    use lgh_render::methods::lgh::{Estimator, LGH, ShadowTarget};
+    use lgh_render::methods::slc::SLC;
+    let mut s = RenderSettings::default();
+    assert_eq!(s.method, LGH);
+    assert_eq!(lgh_gpu::gpu_method_for(&s), Some(lgh_gpu::lgh::LGH_GPU));
+    (s.lgh.estimator, s.lgh.shadow_target) = (Estimator::Paper, ShadowTarget::Centroid);
+    assert_eq!(lgh_gpu::gpu_method_for(&s), None);
+    s.shadows.samples = Some(0);
+    assert_eq!(lgh_gpu::gpu_method_for(&s), Some(lgh_gpu::lgh::LGH_GPU));
+    s.method = SLC;
+    assert_eq!(lgh_gpu::gpu_method_for(&s), None);
+    s.method = BRUTE;
+    assert_eq!(lgh_gpu::gpu_method_for(&s), Some(lgh_gpu::brute::BRUTE_GPU));
+}

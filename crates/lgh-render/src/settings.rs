@@ -46,9 +46,10 @@ pub enum Device {
     Gpu,
 }
 
-/// A backend's stand-in for a method: the GPU method of the same name, or `None` where the
-/// method has not been ported (lgh-gpu's `gpu_method`).
-pub type MethodMap = fn(crate::Method) -> Option<crate::Method>;
+/// A backend's stand-in for the method of a frame with these settings: the GPU method of the
+/// same name, or `None` where the method, or its GPU version with these settings, has not
+/// been ported (lgh-gpu's `gpu_method_for`).
+pub type MethodMap = fn(&RenderSettings) -> Option<crate::Method>;
 
 /// Filters of the shadow estimates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]

@@ -141,7 +141,7 @@ impl FrameLoop {
         settings.vpl_clamp = state.settings.vpl_clamp / (shown as f32).sqrt();
         self.frame += 1;
         let mut device = "cpu";
-        if let Some(m) = self.backend.and_then(|map| map(settings.method)) {
+        if let Some(m) = self.backend.and_then(|map| map(&settings)) {
             (settings.method, device) = (m, "gpu");
         }
         let mut frame = if still || !state.taa {

@@ -140,5 +140,31 @@ fn render_and_view_run_lgh_on_the_gpu() {
     assert_eq!(v["device"], "gpu", "{v}");
     assert_eq!(v["frames"], 10, "{v}");
     assert!(shot.exists());
+    // The U key switches to the paper's estimate, which the GPU loop does not run: the
+    // viewer goes on, on the CPU, and says so.
+    let out = lgh(&[
+        "view",
+        "--headless",
+        "--device",
+        "gpu",
+        "--frames",
+        "3",
+        "--size",
+        "64x36",
+        "--vpls",
+        "2000",
+        "--keys",
+        "u",
+        "--stats",
+        &path(&stats),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&stats).expect("stats")).expect("json");
+    assert_eq!(v["device"], "cpu", "{v}");
     let _ = std::fs::remove_dir_all(&d);
 }

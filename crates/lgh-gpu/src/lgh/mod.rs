@@ -19,7 +19,8 @@ use lgh_render::memory::FrameMemory;
 use lgh_render::methods::lgh::settings::Selection;
 use lgh_render::methods::lgh::tables::LghTables;
 use lgh_render::methods::lgh::{
-    DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt, LghFrame, LoopResult, Prepared, ShadowTarget,
+    DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt, LghFrame, LghSettings, LoopResult, Prepared,
+    ShadowTarget,
 };
 use lgh_render::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
 use lgh_render::passes::gbuffer::GBuffer;
@@ -68,7 +69,7 @@ impl IndirectMethod for GpuLgh {
             .shadows
             .k(self.shadowed, DEFAULT_SHADOW_SAMPLES);
         if k > 0 {
-            supported(inputs)?;
+            supported(&inputs.settings.lgh)?;
         }
         let prepared = LghFrame::prepare(inputs, self.shadowed, memory, true)
             .map_err(|e| RenderError::Backend(e.to_string()))?;
@@ -98,24 +99,26 @@ fn gpu_atrous(s: &mut [Vec3], u: &mut [Vec3], g: &GBuffer, params: &AtrousParams
 /// Refuses the settings whose shadow estimate the GPU loop does not run yet (it runs the
 /// default: the unbiased estimate, representative targets drawn at the ray, stratified
 /// selection).
-fn supported(inputs: &MethodInputs) -> Result<(), RenderError> {
-    let s = &inputs.settings.lgh;
+///
+/// # Errors
+/// The first setting it does not run, named by its flag.
+pub fn supported(s: &LghSettings) -> Result<(), RenderError> {
     let refuse = |what: &str| {
         Err(RenderError::Backend(format!(
             "lgh on the GPU runs the default shadow estimate only; {what} needs --device cpu"
         )))
     };
     if s.estimator != Estimator::Unbiased {
-        return refuse("the paper's estimator");
+        return refuse("--estimator paper");
     }
     if s.shadow_target != ShadowTarget::Representative {
         return refuse("--shadow-target centroid");
     }
     if s.jitter != JitterAt::Ray {
-        return refuse("jitter at candidate time");
+        return refuse("--jitter-at candidate");
     }
     if s.selection != Selection::Stratified {
-        return refuse("streaming selection");
+        return refuse("--selection streaming");
     }
     Ok(())
 }
