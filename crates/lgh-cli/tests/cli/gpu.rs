@@ -114,57 +114,41 @@ fn render_and_view_run_lgh_on_the_gpu() {
     assert_eq!(v["method"], "lgh", "{v}");
     assert_ne!(v["device"], "cpu", "{v}");
     assert!(v["timings_ms"]["lighting"].as_f64().is_some(), "{v}");
-    let out = lgh(&[
-        "view",
-        "--headless",
-        "--device",
-        "gpu",
-        "--frames",
-        "10",
-        "--size",
-        "64x36",
-        "--vpls",
-        "2000",
-        "--screenshot",
-        &path(&shot),
-        "--stats",
-        &path(&stats),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(&stats).expect("stats")).expect("json");
+    // The viewer headless for `frames` frames, with `more` flags: its stats.
+    let view = |frames: &str, more: &[&str]| {
+        let args = [
+            "view",
+            "--headless",
+            "--device",
+            "gpu",
+            "--frames",
+            frames,
+            "--size",
+            "64x36",
+            "--vpls",
+            "2000",
+            "--screenshot",
+            &path(&shot),
+            "--stats",
+            &path(&stats),
+        ];
+        let out = lgh(&[&args[..], more].concat());
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&stats).expect("stats")).expect("json");
+        v
+    };
+    let v = view("10", &[]);
     assert_eq!(v["device"], "gpu", "{v}");
     assert_eq!(v["frames"], 10, "{v}");
     assert!(shot.exists());
     // The U key switches to the paper's estimate, which the GPU loop does not run: the
     // viewer goes on, on the CPU, and says so.
-    let out = lgh(&[
-        "view",
-        "--headless",
-        "--device",
-        "gpu",
-        "--frames",
-        "3",
-        "--size",
-        "64x36",
-        "--vpls",
-        "2000",
-        "--keys",
-        "u",
-        "--stats",
-        &path(&stats),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(&stats).expect("stats")).expect("json");
+    let v = view("3", &["--keys", "u"]);
     assert_eq!(v["device"], "cpu", "{v}");
     let _ = std::fs::remove_dir_all(&d);
 }

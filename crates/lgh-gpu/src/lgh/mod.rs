@@ -19,8 +19,8 @@ use lgh_render::memory::FrameMemory;
 use lgh_render::methods::lgh::settings::Selection;
 use lgh_render::methods::lgh::tables::LghTables;
 use lgh_render::methods::lgh::{
-    DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt, LghFrame, LghSettings, LoopResult, Prepared,
-    ShadowTarget,
+    DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt, LGH, LGH_UNSHADOWED, LghFrame, LghSettings,
+    LoopResult, Prepared, ShadowTarget,
 };
 use lgh_render::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
 use lgh_render::passes::gbuffer::GBuffer;
@@ -34,21 +34,20 @@ mod upload;
 use upload::{Params, Tables};
 
 /// The lighting grid hierarchy with its lighting loop and shadow rays on the GPU.
-pub const LGH_GPU: Method = Method::new(&GpuLgh { shadowed: true });
+pub const LGH_GPU: Method = Method::new(&GpuLgh { cpu: LGH });
 /// The lighting grid hierarchy without shadows, its lighting loop on the GPU.
-pub const LGH_UNSHADOWED_GPU: Method = Method::new(&GpuLgh { shadowed: false });
+pub const LGH_UNSHADOWED_GPU: Method = Method::new(&GpuLgh {
+    cpu: LGH_UNSHADOWED,
+});
 
+/// The GPU version of the CPU method `cpu` (its name, defaults and settings are the CPU's).
 struct GpuLgh {
-    shadowed: bool,
+    cpu: Method,
 }
 
 impl IndirectMethod for GpuLgh {
     fn name(&self) -> &'static str {
-        if self.shadowed {
-            "lgh"
-        } else {
-            "lgh-unshadowed"
-        }
+        self.cpu.get().name()
     }
 
     fn about(&self) -> &'static str {
@@ -56,7 +55,7 @@ impl IndirectMethod for GpuLgh {
     }
 
     fn default_shadow_samples(&self) -> u32 {
-        DEFAULT_SHADOW_SAMPLES
+        self.cpu.get().default_shadow_samples()
     }
 
     fn render(
@@ -64,14 +63,11 @@ impl IndirectMethod for GpuLgh {
         inputs: &MethodInputs,
         memory: &mut FrameMemory,
     ) -> Result<MethodOutput, RenderError> {
-        let k = inputs
-            .settings
-            .shadows
-            .k(self.shadowed, DEFAULT_SHADOW_SAMPLES);
-        if k > 0 {
+        let shadowed = self.cpu == LGH;
+        if inputs.settings.shadows.k(shadowed, DEFAULT_SHADOW_SAMPLES) > 0 {
             supported(&inputs.settings.lgh)?;
         }
-        let prepared = LghFrame::prepare(inputs, self.shadowed, memory, true)
+        let prepared = LghFrame::prepare(inputs, shadowed, memory, true)
             .map_err(|e| RenderError::Backend(e.to_string()))?;
         let frame = match prepared {
             Prepared::Dark(output) => return Ok(output),

@@ -325,6 +325,21 @@ fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f3
     return vec4<f32>(u_k * gain, 1.0);
 }
 
+// The pixel's sums over its samples: S, U and the rays traced.
+var<private> s_sum: vec3<f32>;
+var<private> u_sum: vec3<f32>;
+var<private> rays: u32;
+
+// Takes the shadow sample of light j with contribution c, drawn with probability f / W
+// (`w_ratio` = W / f): adds U_k = c W / f and its S term, and counts its ray.
+fn take(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, c: vec3<f32>, w_ratio: f32) {
+    let u_k = c * w_ratio;
+    u_sum += u_k;
+    let r = shadow_sample(x, n, ng, j, u_k, c);
+    s_sum += r.xyz;
+    rays += u32(r.w);
+}
+
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (id.x >= params.pixels) {
@@ -359,9 +374,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             total += f;
         }
     }
-    var s_sum = vec3<f32>(0.0);
-    var u_sum = vec3<f32>(0.0);
-    var rays = 0u;
+    s_sum = vec3<f32>(0.0);
+    u_sum = vec3<f32>(0.0);
+    rays = 0u;
     let k = params.k;
     if (k > 0u && total > 0.0 && total < 3.0e38) {
         rng_state = hash(params.seed_lo ^ hash(params.seed_hi ^ hash(i)));
@@ -387,22 +402,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             last_c = c;
             last_f = f;
             while (s < k && acc > t) {
-                let u_k = c * (total / f);
-                u_sum += u_k;
-                let r = shadow_sample(x, n, ng, j, u_k, c);
-                s_sum += r.xyz;
-                rays += u32(r.w);
+                take(x, n, ng, j, c, total / f);
                 s++;
                 t = (f32(s) + next_f32()) / f32(k) * total;
             }
         }
         // Thresholds that rounding left beyond the last running sum take the last light.
         while (s < k && last_j != 0xffffffffu) {
-            let u_k = last_c * (total / last_f);
-            u_sum += u_k;
-            let r = shadow_sample(x, n, ng, last_j, u_k, last_c);
-            s_sum += r.xyz;
-            rays += u32(r.w);
+            take(x, n, ng, last_j, last_c, total / last_f);
             s++;
         }
     }
