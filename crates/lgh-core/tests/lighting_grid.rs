@@ -205,14 +205,33 @@ fn restriction_equals_all_scatter() {
     }
 }
 
+/// Two hierarchies are the same to rounding. A grid light's intensity may differ by 1e-5 of
+/// itself plus 1e-6 of its level's brightest: a light that holds only a sliver of its
+/// neighbours' intensity (trilinear weights near 0, computed as 1 - f near 1) carries their
+/// rounding in absolute terms (n = 56, seed 382, 5 levels: 4e-8 on 0.0029, where 1e-5 of
+/// itself allowed 3e-8).
 fn assert_same(a: &LightingGrid, b: &LightingGrid) {
     assert_eq!(a.geometry, b.geometry);
     assert_eq!(a.level_start, b.level_start);
     assert_eq!(a.vertex, b.vertex);
     let h = a.geometry.h_top;
+    let brightest: Vec<f32> = (1..=a.l_max())
+        .map(|l| {
+            a.intensity[a.level_range(l)]
+                .iter()
+                .map(|i| i.max_element())
+                .fold(0.0, f32::max)
+        })
+        .collect();
     for k in 0..a.len() {
         assert!((a.position[k] - b.position[k]).abs().max_element() <= 1e-5 * h);
-        let tol = 1e-5 * a.intensity[k].max_element().max(1e-6);
+        let level = a.level_start.partition_point(|&s| s as usize <= k);
+        let tol = 1e-5 * a.intensity[k].max_element().max(1e-6)
+            + 1e-6
+                * brightest
+                    .get(level.saturating_sub(1))
+                    .copied()
+                    .unwrap_or(0.0);
         assert!((a.intensity[k] - b.intensity[k]).abs().max_element() <= tol);
         assert!((a.deviation[k] - b.deviation[k]).abs().max_element() <= 1e-3 * h);
         assert!((a.normal[k] - b.normal[k]).abs().max_element() <= 1e-5);
@@ -250,6 +269,18 @@ proptest! {
             assert_same(&one, &reference);
             check_invariants(&l, &one);
         }
+    }
+}
+
+/// The case a random run of `parallel_builder_matches_reference` found (a tolerance relative to
+/// a sliver of intensity alone; see `assert_same`), kept as a fixed test.
+#[test]
+fn a_light_holding_a_sliver_matches_the_reference() {
+    let l = random_box(56, 382, Vec3::new(4.0, 1.0, 2.0), Vec3::new(-1.0, 2.0, 0.5));
+    for c in ALL {
+        let one = in_pool(1, || build(&l, LevelCount::Fixed(5), c));
+        let reference = build_reference(&l.input(), one.geometry, c).unwrap();
+        assert_same(&one, &reference);
     }
 }
 
