@@ -4,24 +4,47 @@
 # the shared scenes) at 1280x720 with 100K and 1M VPLs as the viewer does (VPLs regenerated
 # and the hierarchy rebuilt every frame, the viewer's settings, k = 4), with the lighting loop
 # on the GPU, and writes one JSON file: the adapter, and per case the median ms per frame and
-# per pass (the GPU pass from its timestamps where the adapter has them), plus `lgh bench
-# render --device gpu` (the paper's Tables 2 and 3) on the default scene.
+# per pass (the GPU pass from its timestamps where the adapter has them), the same frame on
+# the CPU for comparison, plus `lgh bench render --device gpu` (the paper's Tables 2 and 3) on
+# the default scene.
 #
 # Usage: scripts/gpu-bench.sh [OUT.json]   (default gpu-bench.json)
-# Environment: SIZE (1280x720), VPLS ("100000 1000000"), FRAMES (12), LGH_SCENES.
+# Environment: SIZE (1280x720), VPLS ("100000 1000000"), FRAMES (12), CPU_FRAMES (4; 0 skips
+# the CPU comparison), STEP_TIMEOUT (seconds per step, 100), LGH_SCENES, LGH_BIN (a built
+# `lgh` to use instead of building one, for machines without cargo).
+# Each step that fails or runs out of time is recorded as {"error": ...} and the rest go on.
 # Takes about 2 minutes after the build on a current GPU and 16 cores; lavapipe's times are
 # no measure of a GPU (use SIZE=160x90 VPLS=10000 FRAMES=3 there to check the script).
-set -euo pipefail
+set -uo pipefail
 cd "$(dirname "$0")/.."
 out=$(realpath -m "${1:-gpu-bench.json}")
 size=${SIZE:-1280x720}
 vpls=${VPLS:-"100000 1000000"}
 frames=${FRAMES:-12}
+cpu_frames=${CPU_FRAMES:-4}
+step_timeout=${STEP_TIMEOUT:-100}
 
-cargo build --release -p lgh-cli
-lgh=target/release/lgh
+if [[ -n "${LGH_BIN:-}" ]]; then
+    lgh=$LGH_BIN
+else
+    cargo build --release -p lgh-cli || exit 1
+    lgh=target/release/lgh
+fi
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+
+# step NAME COMMAND...: runs COMMAND (which writes $tmp/NAME.json) under the step timeout,
+# and leaves {"error": ...} there when it fails.
+step() {
+    local name=$1
+    shift
+    echo "== $name" >&2
+    local start=$SECONDS
+    if ! timeout "$step_timeout" "$@" || [[ ! -s "$tmp/$name.json" ]]; then
+        echo "{\"error\": \"step failed or ran past ${step_timeout} s\"}" >"$tmp/$name.json"
+    fi
+    echo "   $((SECONDS - start)) s" >&2
+}
 
 scenes=("builtin:cornell")
 names=("cornell")
@@ -32,21 +55,27 @@ else
     echo "LGH_SCENES does not name the shared scenes: Sponza skipped" >&2
 fi
 
-# The paper's tables with the loop on the GPU (its JSON names the adapter).
-"$lgh" bench render --device gpu --size "$size" --vpls "${vpls// /,}" --runs 3 \
-    --interleave 1,4 --json >"$tmp/tables.json"
-
 cases=()
 for i in "${!scenes[@]}"; do
     for n in $vpls; do
-        f="$tmp/${names[$i]}-$n.json"
-        echo "view ${names[$i]} $size $n VPLs" >&2
+        name="${names[$i]}-$n"
         # The viewer's frame, headless: 4 shadow samples, the rest at its interactive start.
-        "$lgh" view "${scenes[$i]}" --headless --device gpu --size "$size" --vpls "$n" \
-            --shadow-samples 4 --frames "$frames" --light-speed 2 --stats "$f"
-        cases+=("{\"scene\": \"${names[$i]}\", \"vpls\": $n, \"view\": $(cat "$f")}")
+        view=("$lgh" view "${scenes[$i]}" --headless --size "$size" --vpls "$n"
+            --shadow-samples 4 --light-speed 2)
+        step "$name-gpu" "${view[@]}" --device gpu --frames "$frames" --stats "$tmp/$name-gpu.json"
+        cpu="null"
+        if [[ "$cpu_frames" -gt 0 ]]; then
+            step "$name-cpu" "${view[@]}" --device cpu --frames "$cpu_frames" \
+                --stats "$tmp/$name-cpu.json"
+            cpu=$(cat "$tmp/$name-cpu.json")
+        fi
+        cases+=("{\"scene\": \"${names[$i]}\", \"vpls\": $n, \"view\": $(cat "$tmp/$name-gpu.json"), \"view_cpu\": $cpu}")
     done
 done
+
+# The paper's tables with the loop on the GPU (its JSON names the adapter).
+step tables sh -c "\"$lgh\" bench render --device gpu --size $size --vpls ${vpls// /,} \
+    --runs 3 --interleave 1,4 --json >\"$tmp/tables.json\""
 
 {
     echo "{"

@@ -3,6 +3,7 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
+use crate::pool::BufferPool;
 use crate::scene::GpuScene;
 
 /// Why the GPU backend cannot run.
@@ -51,6 +52,8 @@ pub struct GpuContext {
     scene: Mutex<Option<(u64, Arc<GpuScene>)>>,
     /// The compute pipelines compiled so far, by kernel name.
     pipelines: Mutex<HashMap<&'static str, Arc<wgpu::ComputePipeline>>>,
+    /// Buffers kept between frames ([`GpuContext::lease`]).
+    pool: BufferPool,
 }
 
 impl GpuContext {
@@ -88,6 +91,7 @@ impl GpuContext {
             limits,
             scene: Mutex::default(),
             pipelines: Mutex::default(),
+            pool: BufferPool::default(),
         })
     }
 
@@ -203,19 +207,20 @@ impl GpuContext {
             })
     }
 
-    /// The bind group of `pipeline`'s group 0 with `buffers` at bindings 0, 1, ...
+    /// The bind group of `pipeline`'s group 0 with `resources` at bindings 0, 1, ...
+    /// (a whole buffer: `buffer.as_entire_binding()`; a leased one: `lease.binding()`).
     #[must_use]
     pub fn bind_group(
         &self,
         pipeline: &wgpu::ComputePipeline,
-        buffers: &[&wgpu::Buffer],
+        resources: Vec<wgpu::BindingResource<'_>>,
     ) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
-            .iter()
+        let entries: Vec<wgpu::BindGroupEntry<'_>> = resources
+            .into_iter()
             .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
+            .map(|(i, resource)| wgpu::BindGroupEntry {
                 binding: i as u32,
-                resource: b.as_entire_binding(),
+                resource,
             })
             .collect();
         self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -225,134 +230,8 @@ impl GpuContext {
         })
     }
 
-    /// Runs `pipeline` over `invocations` threads (workgroups of 64) and waits for it.
-    ///
-    /// # Errors
-    /// More workgroups than one dispatch allows, or the GPU failed.
-    pub fn dispatch(
-        &self,
-        pipeline: &wgpu::ComputePipeline,
-        bind: &wgpu::BindGroup,
-        invocations: usize,
-    ) -> Result<(), GpuError> {
-        self.run(pipeline, bind, invocations, None)
-    }
-
-    /// [`GpuContext::dispatch`], timed by the GPU's timestamps where the adapter has them:
-    /// the pass's time in milliseconds, or `None` (no timestamp queries).
-    ///
-    /// # Errors
-    /// As [`GpuContext::dispatch`].
-    pub fn dispatch_timed(
-        &self,
-        pipeline: &wgpu::ComputePipeline,
-        bind: &wgpu::BindGroup,
-        invocations: usize,
-    ) -> Result<Option<f64>, GpuError> {
-        if !self
-            .device
-            .features()
-            .contains(wgpu::Features::TIMESTAMP_QUERY)
-        {
-            self.dispatch(pipeline, bind, invocations)?;
-            return Ok(None);
-        }
-        let queries = self.device.create_query_set(&wgpu::QuerySetDescriptor {
-            label: Some("pass time"),
-            ty: wgpu::QueryType::Timestamp,
-            count: 2,
-        });
-        let resolved = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("pass time"),
-            size: 16,
-            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        self.run(pipeline, bind, invocations, Some((&queries, &resolved)))?;
-        let ticks: Vec<u64> = self.read_back(&resolved, 2)?;
-        let ns =
-            ticks[1].saturating_sub(ticks[0]) as f64 * f64::from(self.queue.get_timestamp_period());
-        Ok(Some(ns * 1e-6))
-    }
-
-    /// One compute pass of `pipeline` over `invocations` threads, with its start and end
-    /// timestamps resolved into the buffer of `timed` if given; waits for it.
-    fn run(
-        &self,
-        pipeline: &wgpu::ComputePipeline,
-        bind: &wgpu::BindGroup,
-        invocations: usize,
-        timed: Option<(&wgpu::QuerySet, &wgpu::Buffer)>,
-    ) -> Result<(), GpuError> {
-        let groups = u32::try_from(invocations.div_ceil(64))
-            .ok()
-            .filter(|&x| x <= self.limits.max_compute_workgroups_per_dimension)
-            .ok_or_else(|| {
-                GpuError::TooLarge(format!("{invocations} invocations exceed one dispatch"))
-            })?;
-        let mut enc = self.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: None,
-                timestamp_writes: timed.map(|(query_set, _)| wgpu::ComputePassTimestampWrites {
-                    query_set,
-                    beginning_of_pass_write_index: Some(0),
-                    end_of_pass_write_index: Some(1),
-                }),
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, bind, &[]);
-            pass.dispatch_workgroups(groups, 1, 1);
-        }
-        if let Some((queries, resolved)) = timed {
-            enc.resolve_query_set(queries, 0..2, resolved, 0);
-        }
-        self.queue.submit([enc.finish()]);
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map(|_| ())
-            .map_err(|e| GpuError::Failed(e.to_string()))
-    }
-
-    /// Copies `buffer` (`len` elements of `T`) back to the CPU and waits for it.
-    ///
-    /// # Errors
-    /// The GPU failed.
-    pub fn read_back<T: bytemuck::Pod>(
-        &self,
-        buffer: &wgpu::Buffer,
-        len: usize,
-    ) -> Result<Vec<T>, GpuError> {
-        let size = (len * std::mem::size_of::<T>()) as u64;
-        if size == 0 {
-            return Ok(Vec::new());
-        }
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("read back"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = self.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
-        self.queue.submit([enc.finish()]);
-        let slice = staging.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| GpuError::Failed(e.to_string()))?;
-        rx.recv()
-            .map_err(|e| GpuError::Failed(e.to_string()))?
-            .map_err(|e| GpuError::Failed(e.to_string()))?;
-        let view = slice
-            .get_mapped_range()
-            .map_err(|e| GpuError::Failed(e.to_string()))?;
-        let out = bytemuck::cast_slice(&view).to_vec();
-        drop(view);
-        staging.unmap();
-        Ok(out)
+    /// The pool of buffers kept between frames.
+    pub(crate) fn pool(&self) -> &BufferPool {
+        &self.pool
     }
 }

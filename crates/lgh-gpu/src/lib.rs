@@ -14,7 +14,9 @@
 //! the same settings and gives the same `Frame`. Results are deterministic: every pixel sums
 //! its own terms in a fixed order (no float atomics).
 
+pub mod batch;
 mod context;
+pub mod pool;
 pub mod scene;
 
 pub mod atrous;
@@ -22,7 +24,9 @@ pub mod brute;
 pub mod lgh;
 pub mod rays;
 
+pub use batch::Batch;
 pub use context::{GpuContext, GpuError};
+pub use pool::Lease;
 pub use scene::GpuScene;
 
 /// The GPU method for a frame of `settings`: [`gpu_method`] of its method, or `None` where

@@ -7,6 +7,9 @@ use glam::{Vec3, Vec4};
 use lgh_render::denoise::atrous::{AtrousParams, filter_guide};
 use lgh_render::passes::gbuffer::GBuffer;
 
+use rayon::prelude::*;
+
+use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
 
 /// `Params` of the shader.
@@ -46,43 +49,69 @@ pub fn filter_ratio_pair(
     if passes == 0 || n == 0 {
         return Ok(());
     }
-    let geo: Vec<Vec4> = (0..n)
-        .flat_map(|p| {
+    let geo: Vec<[Vec4; 2]> = (0..n)
+        .into_par_iter()
+        .map(|p| {
             let hit = if g.is_hit(p) { 1.0 } else { 0.0 };
             [g.position[p].extend(hit), g.normal[p].extend(0.0)]
         })
         .collect();
-    let values: Vec<Vec4> = (0..n)
-        .flat_map(|p| [s[p].extend(filter_guide(s[p], u[p])), u[p].extend(0.0)])
+    let values: Vec<[Vec4; 2]> = s
+        .par_iter()
+        .zip(u.par_iter())
+        .map(|(&s, &u)| [s.extend(filter_guide(s, u)), u.extend(0.0)])
         .collect();
-    let geo = ctx.storage("a-trous geometry", &geo)?;
+    let geo = ctx.upload("a-trous geometry", &geo)?;
     let buffers = [
-        ctx.storage("a-trous S, U", &values)?,
-        ctx.storage("a-trous S, U (next)", &values)?,
+        ctx.upload("a-trous S, U", &values)?,
+        ctx.output("a-trous S, U (next)", 32 * n as u64)?,
     ];
     let pipeline = ctx.pipeline("atrous", source);
-    for pass in 0..passes {
-        let uniform = ctx.uniform(
-            "a-trous pass",
-            &Params {
-                width: g.width,
-                height: g.height,
-                step: 1 << pass,
-                _pad: 0,
-                inv_c: 4f32.powi(pass as i32) / params.c_phi,
-                inv_n: 1.0 / params.n_phi,
-                inv_p: 1.0 / params.p_phi,
-                _pad2: 0.0,
-            },
+    // Every pass's uniform and bind group first: the passes then run in one submission.
+    let uniforms: Vec<wgpu::Buffer> = (0..passes)
+        .map(|pass| {
+            ctx.uniform(
+                "a-trous pass",
+                &Params {
+                    width: g.width,
+                    height: g.height,
+                    step: 1 << pass,
+                    _pad: 0,
+                    inv_c: 4f32.powi(pass as i32) / params.c_phi,
+                    inv_n: 1.0 / params.n_phi,
+                    inv_p: 1.0 / params.p_phi,
+                    _pad2: 0.0,
+                },
+            )
+        })
+        .collect();
+    let mut batch = Batch::new(ctx);
+    for (pass, uniform) in uniforms.iter().enumerate() {
+        let (from, to) = (&buffers[pass % 2], &buffers[1 - pass % 2]);
+        let bind = ctx.bind_group(
+            &pipeline,
+            vec![
+                uniform.as_entire_binding(),
+                geo.binding(),
+                from.binding(),
+                to.binding(),
+            ],
         );
-        let (from, to) = (&buffers[pass as usize % 2], &buffers[1 - pass as usize % 2]);
-        let bind = ctx.bind_group(&pipeline, &[&uniform, &geo, from, to]);
-        ctx.dispatch(&pipeline, &bind, n)?;
+        batch.dispatch("shadow_filter", &pipeline, &bind, n)?;
     }
-    let out: Vec<Vec4> = ctx.read_back(&buffers[passes as usize % 2], 2 * n)?;
-    for (p, pair) in out.chunks(2).enumerate() {
-        s[p] = pair[0].truncate();
-        u[p] = pair[1].truncate();
-    }
+    let last = &buffers[passes as usize % 2];
+    batch.read(last.buffer(), last.bytes())?;
+    let (reads, _) = batch.finish()?;
+    let out: &[[Vec4; 2]] = reads
+        .first()
+        .map(|r| bytemuck::cast_slice(r))
+        .unwrap_or_default();
+    s.par_iter_mut()
+        .zip(u.par_iter_mut())
+        .zip(out.par_iter())
+        .for_each(|((s, u), pair)| {
+            *s = pair[0].truncate();
+            *u = pair[1].truncate();
+        });
     Ok(())
 }

@@ -14,7 +14,11 @@ use lgh_render::memory::FrameMemory;
 use lgh_render::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
 use lgh_render::settings::RenderError;
 
+use bytemuck::Zeroable;
+
+use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
+use crate::scene::pack_gbuffer;
 
 /// Every pixel sums every VPL with an exact shadow ray, on the GPU.
 pub const BRUTE_GPU: Method = Method::new(&GpuBrute { shadowed: true });
@@ -99,16 +103,7 @@ fn render_brute(ctx: &GpuContext, i: &MethodInputs, shadows: bool) -> Result<Vec
     let (g, vpls) = (i.gbuffer, i.vpls);
     let n = g.len();
     let scene = ctx.scene(i.world)?;
-    let pixels: Vec<[Vec4; 4]> = (0..n)
-        .map(|p| {
-            [
-                g.position[p].extend(if g.is_hit(p) { 1.0 } else { 0.0 }),
-                g.normal[p].extend(0.0),
-                g.geo_normal[p].extend(0.0),
-                g.albedo[p].extend(0.0),
-            ]
-        })
-        .collect();
+    let pixels = pack_gbuffer(g, |_| 0.0);
     let vpl_data: Vec<[Vec4; 3]> = (0..vpls.len())
         .map(|j| {
             [
@@ -118,19 +113,24 @@ fn render_brute(ctx: &GpuContext, i: &MethodInputs, shadows: bool) -> Result<Vec
             ]
         })
         .collect();
-    let gbuffer = ctx.storage("g-buffer", &pixels)?;
-    let vpl_buf = ctx.storage("vpls", &vpl_data)?;
-    let out = ctx.storage("irradiance", &vec![Vec4::ZERO; n])?;
-    let params = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("brute params"),
-        size: std::mem::size_of::<Params>() as u64,
-        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
+    if vpls.is_empty() {
+        return Ok(vec![Vec4::ZERO; n]);
+    }
+    let gbuffer = ctx.upload("g-buffer", &pixels)?;
+    let vpl_buf = ctx.upload("vpls", &vpl_data)?;
+    let out = ctx.output("irradiance", 16 * n as u64)?;
+    let params = ctx.uniform("brute params", &Params::zeroed());
     let pipeline = ctx.pipeline("brute", source);
     let bind = ctx.bind_group(
         &pipeline,
-        &[&params, &scene.nodes, &scene.tris, &gbuffer, &vpl_buf, &out],
+        vec![
+            params.as_entire_binding(),
+            scene.nodes.as_entire_binding(),
+            scene.tris.as_entire_binding(),
+            gbuffer.binding(),
+            vpl_buf.binding(),
+            out.binding(),
+        ],
     );
     let chunk = (PAIRS_PER_DISPATCH / n.max(1)).clamp(1, MAX_VPLS_PER_DISPATCH);
     let eps = i.eps();
@@ -138,6 +138,7 @@ fn render_brute(ctx: &GpuContext, i: &MethodInputs, shadows: bool) -> Result<Vec
         "indirect (brute force, GPU)",
         vpls.len().div_ceil(chunk) as u64,
     );
+    let mut irradiance = Vec::new();
     for first in (0..vpls.len()).step_by(chunk) {
         let p = Params {
             pixels: n as u32,
@@ -148,10 +149,23 @@ fn render_brute(ctx: &GpuContext, i: &MethodInputs, shadows: bool) -> Result<Vec
             ray_eps: i.world.ray_epsilon,
             _pad: [0; 2],
         };
+        // One submission per chunk: the parameters are written between them.
         ctx.queue.write_buffer(&params, 0, bytemuck::bytes_of(&p));
-        ctx.dispatch(&pipeline, &bind, n)?;
+        let mut batch = Batch::new(ctx);
+        if first == 0 {
+            batch.clear(out.buffer());
+        }
+        batch.dispatch("brute", &pipeline, &bind, n)?;
+        let last = first + chunk >= vpls.len();
+        if last {
+            batch.read(out.buffer(), out.bytes())?;
+        }
+        let (reads, _) = batch.finish()?;
+        if last && let Some(r) = reads.first() {
+            irradiance = bytemuck::cast_slice::<_, Vec4>(r)[..n].to_vec();
+        }
         i.progress.advance(1);
     }
     i.progress.end();
-    ctx.read_back(&out, n)
+    Ok(irradiance)
 }

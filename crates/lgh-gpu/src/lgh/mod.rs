@@ -14,6 +14,7 @@
 use std::time::Instant;
 
 use glam::{Vec3, Vec4};
+use rayon::prelude::*;
 use lgh_render::denoise::atrous::AtrousParams;
 use lgh_render::memory::FrameMemory;
 use lgh_render::methods::lgh::settings::Selection;
@@ -27,7 +28,9 @@ use lgh_render::passes::gbuffer::GBuffer;
 use lgh_render::settings::RenderError;
 use lgh_render::shading::shadow_pass::ShadowEstimates;
 
+use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
+use crate::pool::Lease;
 
 mod upload;
 
@@ -144,58 +147,54 @@ fn lighting_loop(
     let scene = ctx.scene(inputs.world)?;
     let packed = Tables::new(g, tables)?;
     let params = Params::new(inputs, tables, &packed)?;
+    let params = ctx.uniform("lgh params", &params);
     let buffers = [
-        ctx.uniform("lgh params", &params),
-        ctx.storage("g-buffer", &packed.pixels)?,
-        ctx.storage("lights", &packed.lights)?,
-        ctx.storage("light lists", &packed.lists)?,
-        ctx.storage("hierarchy tables", &packed.words)?,
-        ctx.storage("representatives", &packed.reps)?,
-        ctx.storage("A, S, U", &vec![Vec4::ZERO; 3 * n])?,
+        ctx.upload("g-buffer", &packed.pixels)?,
+        ctx.upload("lights", &packed.lights)?,
+        ctx.upload("light lists", &packed.lists)?,
+        ctx.upload("hierarchy tables", &packed.words)?,
+        ctx.upload("representatives", &packed.reps)?,
     ];
+    // Every pixel's three words are written by the kernel: no clearing.
+    let out = ctx.output("A, S, U", 48 * n as u64)?;
     let pipeline = ctx.pipeline("lgh", source);
-    let [params_buf, pixels, lights, lists, words, reps, out] = &buffers;
-    let bind = ctx.bind_group(
-        &pipeline,
-        &[
-            params_buf,
-            &scene.nodes,
-            &scene.tris,
-            pixels,
-            lights,
-            lists,
-            words,
-            reps,
-            out,
-        ],
-    );
+    let mut resources = vec![
+        params.as_entire_binding(),
+        scene.nodes.as_entire_binding(),
+        scene.tris.as_entire_binding(),
+    ];
+    resources.extend(buffers.iter().map(Lease::binding));
+    resources.push(out.binding());
+    let bind = ctx.bind_group(&pipeline, resources);
     let upload_ms = start.elapsed().as_secs_f64() * 1e3;
-    let kernel_ms = ctx.dispatch_timed(&pipeline, &bind, n)?;
-    let read_start = Instant::now();
-    let result: Vec<Vec4> = ctx.read_back(out, 3 * n)?;
-    let read_ms = read_start.elapsed().as_secs_f64() * 1e3;
+    let mut batch = Batch::new(ctx);
+    batch.dispatch("lighting", &pipeline, &bind, n)?;
+    batch.read(out.buffer(), out.bytes())?;
+    let (reads, gpu_ms) = batch.finish()?;
+    let result: &[Vec4] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
+    let result = &result[..(3 * n).min(result.len())];
     let k = tables.k as usize;
     let plane = |c: usize| -> Vec<Vec3> {
         if k == 0 && c > 0 {
             return Vec::new();
         }
-        result.chunks(3).map(|p| p[c].truncate()).collect()
+        result.par_chunks(3).map(|p| p[c].truncate()).collect()
     };
     let mut timings = lgh_core::timing::Timings::default();
     let total_ms = start.elapsed().as_secs_f64() * 1e3;
     // The loop's own time from the GPU's timestamps where it has them (the wall time
     // otherwise); the copies to and from the GPU apart.
-    let loop_ms = kernel_ms.unwrap_or(total_ms - upload_ms - read_ms);
+    let loop_ms = gpu_ms.first().map_or(total_ms - upload_ms, |&(_, ms)| ms);
     timings.push("lighting", loop_ms);
     timings.push("gpu_transfer", (total_ms - loop_ms).max(0.0));
     Ok(LoopResult {
         a: plane(0),
-        overdraw: result.chunks(3).map(|p| p[0].w as u32).collect(),
+        overdraw: result.par_chunks(3).map(|p| p[0].w as u32).collect(),
         estimates: ShadowEstimates {
             k,
             s: plane(1),
             u: plane(2),
-            rays: result.chunks(3).map(|p| p[1].w as u64).sum(),
+            rays: result.par_chunks(3).map(|p| p[1].w as u64).sum(),
         },
         timings,
     })

@@ -8,6 +8,7 @@ use lgh_render::passes::gbuffer::GBuffer;
 use rayon::prelude::*;
 
 use crate::context::GpuError;
+use crate::scene::pack_gbuffer;
 
 /// Hierarchies the uniform holds (the six normal bins, and room).
 pub(super) const MAX_HIERARCHIES: usize = 8;
@@ -77,17 +78,7 @@ impl Tables {
                 t.hierarchies.len()
             )));
         }
-        let pixels = (0..g.len())
-            .into_par_iter()
-            .map(|p| {
-                [
-                    g.position[p].extend(if g.is_hit(p) { 1.0 } else { 0.0 }),
-                    g.normal[p].extend(0.0),
-                    g.geo_normal[p].extend(0.0),
-                    g.albedo[p].extend(f32::from_bits(t.bins.list[p])),
-                ]
-            })
-            .collect();
+        let pixels = pack_gbuffer(g, |p| f32::from_bits(t.bins.list[p]));
         let mut lights: Vec<[Vec4; 4]> = t
             .lights
             .par_iter()

@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 
+use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
 use crate::scene::GpuScene;
 
@@ -55,29 +56,22 @@ pub fn occluded_between(
             ]
         })
         .collect();
-    let segs = ctx.storage("point pairs", &data)?;
-    let out = ctx.storage("blocked", &vec![0u32; pairs.len()])?;
-    let module = ctx
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("occlusion"),
-            source: wgpu::ShaderSource::Wgsl(source().into()),
-        });
-    let pipeline = ctx
-        .device
-        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("occlusion"),
-            layout: None,
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-    let bind = ctx.bind_group(&pipeline, &[&segs, &scene.nodes, &scene.tris, &out]);
-    ctx.dispatch(&pipeline, &bind, pairs.len())?;
-    Ok(ctx
-        .read_back::<u32>(&out, pairs.len())?
-        .into_iter()
-        .map(|b| b != 0)
-        .collect())
+    let segs = ctx.upload("point pairs", &data)?;
+    let out = ctx.output("blocked", 4 * pairs.len() as u64)?;
+    let pipeline = ctx.pipeline("occlusion", source);
+    let bind = ctx.bind_group(
+        &pipeline,
+        vec![
+            segs.binding(),
+            scene.nodes.as_entire_binding(),
+            scene.tris.as_entire_binding(),
+            out.binding(),
+        ],
+    );
+    let mut batch = Batch::new(ctx);
+    batch.dispatch("occlusion", &pipeline, &bind, pairs.len())?;
+    batch.read(out.buffer(), out.bytes())?;
+    let (reads, _) = batch.finish()?;
+    let blocked: &[u32] = bytemuck::cast_slice(&reads[0]);
+    Ok(blocked[..pairs.len()].iter().map(|&b| b != 0).collect())
 }

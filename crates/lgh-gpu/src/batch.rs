@@ -1,0 +1,204 @@
+//! A frame's GPU work as one submission: its compute passes in order, each timed by the GPU's
+//! timestamps where the adapter has them, and the copies of its results back to the CPU,
+//! with one wait at the end. A wait per pass (and a read-back buffer allocated per copy) had
+//! made the four a-trous passes cost more on an H200 than on 16 CPU cores.
+
+use rayon::prelude::*;
+
+use crate::context::{GpuContext, GpuError};
+use crate::pool::Lease;
+
+/// Timed passes one batch holds at most (further passes run untimed).
+const MAX_TIMED: u32 = 32;
+
+/// The times of a batch's passes, in milliseconds, summed by name in the order first seen.
+pub type PassTimes = Vec<(&'static str, f64)>;
+
+/// Compute passes and read-backs recorded for one submission.
+pub struct Batch<'c> {
+    ctx: &'c GpuContext,
+    enc: wgpu::CommandEncoder,
+    /// The timestamp queries and the names of the passes they time.
+    queries: Option<wgpu::QuerySet>,
+    names: Vec<&'static str>,
+    /// The read-backs: (staging buffer, bytes).
+    reads: Vec<Lease<'c>>,
+}
+
+impl<'c> Batch<'c> {
+    /// An empty batch on `ctx`.
+    #[must_use]
+    pub fn new(ctx: &'c GpuContext) -> Self {
+        let timed = ctx
+            .device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY);
+        let queries = timed.then(|| {
+            ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("pass times"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2 * MAX_TIMED,
+            })
+        });
+        Self {
+            ctx,
+            enc: ctx.device.create_command_encoder(&Default::default()),
+            queries,
+            names: Vec::new(),
+            reads: Vec::new(),
+        }
+    }
+
+    /// Records a pass of `pipeline` over `invocations` threads (workgroups of 64), timed
+    /// under `name`.
+    ///
+    /// # Errors
+    /// More workgroups than one dispatch allows.
+    pub fn dispatch(
+        &mut self,
+        name: &'static str,
+        pipeline: &wgpu::ComputePipeline,
+        bind: &wgpu::BindGroup,
+        invocations: usize,
+    ) -> Result<(), GpuError> {
+        let groups = u32::try_from(invocations.div_ceil(64))
+            .ok()
+            .filter(|&x| x <= self.ctx.limits.max_compute_workgroups_per_dimension)
+            .ok_or_else(|| {
+                GpuError::TooLarge(format!("{invocations} invocations exceed one dispatch"))
+            })?;
+        let slot = self.names.len() as u32;
+        let timestamp_writes = self
+            .queries
+            .as_ref()
+            .filter(|_| slot < MAX_TIMED)
+            .map(|query_set| wgpu::ComputePassTimestampWrites {
+                query_set,
+                beginning_of_pass_write_index: Some(2 * slot),
+                end_of_pass_write_index: Some(2 * slot + 1),
+            });
+        if timestamp_writes.is_some() {
+            self.names.push(name);
+        }
+        let mut pass = self.enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(name),
+            timestamp_writes,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind, &[]);
+        pass.dispatch_workgroups(groups, 1, 1);
+        Ok(())
+    }
+
+    /// Records the zeroing of `buffer`.
+    pub fn clear(&mut self, buffer: &wgpu::Buffer) {
+        self.enc.clear_buffer(buffer, 0, None);
+    }
+
+    /// Records the copy of the first `bytes` of `from` back to the CPU; [`Batch::finish`]
+    /// returns it (in the order of these calls).
+    ///
+    /// # Errors
+    /// The read-back buffer could not be leased.
+    pub fn read(&mut self, from: &wgpu::Buffer, bytes: u64) -> Result<(), GpuError> {
+        let staging = self.ctx.lease(
+            "read back",
+            bytes,
+            wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        )?;
+        self.enc
+            .copy_buffer_to_buffer(from, 0, staging.buffer(), 0, bytes.next_multiple_of(4));
+        self.reads.push(staging);
+        Ok(())
+    }
+
+    /// Submits the batch and waits for it: the bytes of each [`Batch::read`] and the passes'
+    /// GPU times (empty without timestamp queries).
+    ///
+    /// # Errors
+    /// The GPU failed.
+    pub fn finish(mut self) -> Result<(Vec<Vec<Words>>, PassTimes), GpuError> {
+        let ctx = self.ctx;
+        let timed = self.names.len() as u32;
+        let mut stamps = None;
+        if let Some(q) = self.queries.as_ref().filter(|_| timed > 0) {
+            let bytes = 16 * u64::from(timed);
+            let resolved = ctx.lease(
+                "pass times",
+                bytes,
+                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            )?;
+            self.enc.resolve_query_set(q, 0..2 * timed, resolved.buffer(), 0);
+            let staging = ctx.lease(
+                "pass times read back",
+                bytes,
+                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            )?;
+            self.enc
+                .copy_buffer_to_buffer(resolved.buffer(), 0, staging.buffer(), 0, bytes);
+            stamps = Some((resolved, staging, bytes));
+        }
+        ctx.queue.submit([self.enc.finish()]);
+        let mut maps: Vec<(&wgpu::Buffer, u64)> =
+            self.reads.iter().map(|l| (l.buffer(), l.bytes())).collect();
+        if let Some((_, staging, bytes)) = &stamps {
+            maps.push((staging.buffer(), *bytes));
+        }
+        let mut out = map_all(ctx, &maps)?;
+        let mut times: PassTimes = Vec::new();
+        if stamps.is_some() {
+            let raw = out.pop().unwrap_or_default();
+            let ticks: &[u64] = bytemuck::cast_slice(&raw);
+            let period = f64::from(ctx.queue.get_timestamp_period());
+            for (name, t) in self.names.iter().zip(ticks.chunks_exact(2)) {
+                let ms = t[1].saturating_sub(t[0]) as f64 * period * 1e-6;
+                match times.iter_mut().find(|(n, _)| n == name) {
+                    Some((_, sum)) => *sum += ms,
+                    None => times.push((name, ms)),
+                }
+            }
+        }
+        Ok((out, times))
+    }
+}
+
+/// Sixteen bytes of a read-back, aligned for any of the kernels' element types (cast a
+/// read-back with `bytemuck::cast_slice` to `Vec4`, `u32` or `u64`).
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Words([u32; 4]);
+
+/// Maps each (buffer, bytes) for reading after the submitted work, waits, and copies the
+/// bytes out (in parallel: a frame's read-back is tens of megabytes).
+fn map_all(ctx: &GpuContext, buffers: &[(&wgpu::Buffer, u64)]) -> Result<Vec<Vec<Words>>, GpuError> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    for (i, (b, bytes)) in buffers.iter().enumerate() {
+        let tx = tx.clone();
+        b.slice(..*bytes).map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send((i, r));
+        });
+    }
+    drop(tx);
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| GpuError::Failed(e.to_string()))?;
+    for (_, r) in rx.iter() {
+        r.map_err(|e| GpuError::Failed(e.to_string()))?;
+    }
+    let mut out = Vec::with_capacity(buffers.len());
+    for (b, bytes) in buffers {
+        let slice = b.slice(..*bytes);
+        let view = slice
+            .get_mapped_range()
+            .map_err(|e| GpuError::Failed(e.to_string()))?;
+        let mut words = vec![Words::default(); (*bytes as usize).div_ceil(16)];
+        let dst: &mut [u8] = bytemuck::cast_slice_mut(&mut words);
+        dst.par_chunks_mut(1 << 20)
+            .zip(view.par_chunks(1 << 20))
+            .for_each(|(d, s)| d[..s.len()].copy_from_slice(s));
+        out.push(words);
+        drop(view);
+        b.unmap();
+    }
+    Ok(out)
+}

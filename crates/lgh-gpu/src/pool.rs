@@ -1,0 +1,175 @@
+//! Buffers kept from frame to frame: a frame's tables, images and read-back copies are the
+//! same size every frame, and allocating (and zeroing) 100 MB of device memory each frame
+//! cost more than the lighting loop itself on an H200 (docs/performance.md, "The GPU
+//! frame's transfers"). A frame leases what it needs ([`GpuContext::lease`]) and the lease
+//! returns the buffer on drop; two frames at once (tests on threads) lease two buffers, so
+//! no frame writes into another's.
+
+use std::collections::HashMap;
+use std::num::NonZeroU64;
+use std::sync::{Mutex, PoisonError};
+
+use crate::context::{GpuContext, GpuError};
+
+/// The free buffers, by label and usage.
+#[derive(Debug, Default)]
+pub(crate) struct BufferPool {
+    free: Mutex<HashMap<(&'static str, u32), Vec<wgpu::Buffer>>>,
+}
+
+/// Free buffers kept per label and usage (two frames at once, and room).
+const KEPT: usize = 2;
+
+impl BufferPool {
+    /// A free buffer of at least `bytes` under `key`, the smallest such, taken out.
+    fn take(&self, key: (&'static str, u32), bytes: u64) -> Option<wgpu::Buffer> {
+        let mut free = self.free.lock().unwrap_or_else(PoisonError::into_inner);
+        let list = free.get_mut(&key)?;
+        let at = (0..list.len())
+            .filter(|&i| list[i].size() >= bytes)
+            .min_by_key(|&i| list[i].size())?;
+        Some(list.swap_remove(at))
+    }
+
+    /// Puts `buffer` back under `key`, dropping the smallest beyond [`KEPT`].
+    fn give(&self, key: (&'static str, u32), buffer: wgpu::Buffer) {
+        let mut free = self.free.lock().unwrap_or_else(PoisonError::into_inner);
+        let list = free.entry(key).or_default();
+        list.push(buffer);
+        if list.len() > KEPT {
+            list.sort_by_key(|b| std::cmp::Reverse(b.size()));
+            list.truncate(KEPT);
+        }
+    }
+}
+
+/// A buffer leased from the context's pool for one frame, `bytes` of it in use; it goes
+/// back to the pool when dropped.
+#[derive(Debug)]
+pub struct Lease<'c> {
+    ctx: &'c GpuContext,
+    key: (&'static str, u32),
+    buffer: Option<wgpu::Buffer>,
+    bytes: u64,
+}
+
+impl Lease<'_> {
+    /// The buffer (possibly larger than [`Lease::bytes`]).
+    #[must_use]
+    pub fn buffer(&self) -> &wgpu::Buffer {
+        // The option is emptied only by drop.
+        self.buffer.as_ref().unwrap_or_else(|| unreachable!())
+    }
+
+    /// The bytes in use.
+    #[must_use]
+    pub fn bytes(&self) -> u64 {
+        self.bytes
+    }
+
+    /// The binding of the bytes in use (a shader's `arrayLength` sees them alone).
+    #[must_use]
+    pub fn binding(&self) -> wgpu::BindingResource<'_> {
+        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: self.buffer(),
+            offset: 0,
+            size: NonZeroU64::new(self.bytes),
+        })
+    }
+}
+
+impl Drop for Lease<'_> {
+    fn drop(&mut self) {
+        if let Some(b) = self.buffer.take() {
+            self.ctx.pool().give(self.key, b);
+        }
+    }
+}
+
+impl GpuContext {
+    /// A buffer of at least `bytes` (rounded up to 16; at least 16) with `usage`, from the
+    /// pool where one is free, else new (with an eighth more room, so that a frame slightly
+    /// larger than the last reuses it). Its contents are whatever was there.
+    ///
+    /// # Errors
+    /// A storage buffer larger than the adapter's `max_storage_buffer_binding_size`.
+    pub fn lease(
+        &self,
+        label: &'static str,
+        bytes: u64,
+        usage: wgpu::BufferUsages,
+    ) -> Result<Lease<'_>, GpuError> {
+        let bytes = bytes.max(16).next_multiple_of(16);
+        let max = self.limits.max_storage_buffer_binding_size;
+        if usage.contains(wgpu::BufferUsages::STORAGE) && bytes > max {
+            return Err(GpuError::TooLarge(format!(
+                "{label}: {} MB exceed the adapter's largest storage buffer ({} MB)",
+                bytes >> 20,
+                max >> 20
+            )));
+        }
+        let key = (label, usage.bits());
+        let buffer = match self.pool().take(key, bytes) {
+            Some(b) => b,
+            None => {
+                let mut size = (bytes + bytes / 8).next_multiple_of(256);
+                if usage.contains(wgpu::BufferUsages::STORAGE) {
+                    size = size.min(max).max(bytes);
+                }
+                self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage,
+                    mapped_at_creation: false,
+                })
+            }
+        };
+        Ok(Lease {
+            ctx: self,
+            key,
+            buffer: Some(buffer),
+            bytes,
+        })
+    }
+
+    /// A storage buffer (leased) holding `data`, written through the queue (it arrives
+    /// before the next submitted work). An empty `data` is one zero element: an empty
+    /// binding is not allowed.
+    ///
+    /// # Errors
+    /// As [`GpuContext::lease`].
+    pub fn upload<T: bytemuck::Pod>(
+        &self,
+        label: &'static str,
+        data: &[T],
+    ) -> Result<Lease<'_>, GpuError> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let lease = self.lease(label, bytes.len() as u64, Self::STORAGE)?;
+        let mut padded = [0u8; 16];
+        let whole = bytes.len().next_multiple_of(4);
+        if bytes.len() == whole && !bytes.is_empty() {
+            self.queue.write_buffer(lease.buffer(), 0, bytes);
+        } else if bytes.len() < 16 {
+            padded[..bytes.len()].copy_from_slice(bytes);
+            self.queue.write_buffer(lease.buffer(), 0, &padded);
+        } else {
+            let mut v = bytes.to_vec();
+            v.resize(whole, 0);
+            self.queue.write_buffer(lease.buffer(), 0, &v);
+        }
+        Ok(lease)
+    }
+
+    /// A storage buffer (leased) of `bytes` that a kernel writes in full.
+    ///
+    /// # Errors
+    /// As [`GpuContext::lease`].
+    pub fn output(&self, label: &'static str, bytes: u64) -> Result<Lease<'_>, GpuError> {
+        self.lease(label, bytes, Self::STORAGE)
+    }
+
+    /// The usage of the storage buffers: read and written by kernels, copied to and from.
+    pub(crate) const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+        .union(wgpu::BufferUsages::COPY_SRC)
+        .union(wgpu::BufferUsages::COPY_DST);
+}
