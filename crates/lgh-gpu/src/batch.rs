@@ -68,15 +68,15 @@ impl<'c> Batch<'c> {
                 GpuError::TooLarge(format!("{invocations} invocations exceed one dispatch"))
             })?;
         let slot = self.names.len() as u32;
-        let timestamp_writes = self
-            .queries
-            .as_ref()
-            .filter(|_| slot < MAX_TIMED)
-            .map(|query_set| wgpu::ComputePassTimestampWrites {
-                query_set,
-                beginning_of_pass_write_index: Some(2 * slot),
-                end_of_pass_write_index: Some(2 * slot + 1),
-            });
+        let timestamp_writes =
+            self.queries
+                .as_ref()
+                .filter(|_| slot < MAX_TIMED)
+                .map(|query_set| wgpu::ComputePassTimestampWrites {
+                    query_set,
+                    beginning_of_pass_write_index: Some(2 * slot),
+                    end_of_pass_write_index: Some(2 * slot + 1),
+                });
         if timestamp_writes.is_some() {
             self.names.push(name);
         }
@@ -128,7 +128,8 @@ impl<'c> Batch<'c> {
                 bytes,
                 wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
             )?;
-            self.enc.resolve_query_set(q, 0..2 * timed, resolved.buffer(), 0);
+            self.enc
+                .resolve_query_set(q, 0..2 * timed, resolved.buffer(), 0);
             let staging = ctx.lease(
                 "pass times read back",
                 bytes,
@@ -170,7 +171,10 @@ pub struct Words([u32; 4]);
 
 /// Maps each (buffer, bytes) for reading after the submitted work, waits, and copies the
 /// bytes out (in parallel: a frame's read-back is tens of megabytes).
-fn map_all(ctx: &GpuContext, buffers: &[(&wgpu::Buffer, u64)]) -> Result<Vec<Vec<Words>>, GpuError> {
+fn map_all(
+    ctx: &GpuContext,
+    buffers: &[(&wgpu::Buffer, u64)],
+) -> Result<Vec<Vec<Words>>, GpuError> {
     let (tx, rx) = std::sync::mpsc::channel();
     for (i, (b, bytes)) in buffers.iter().enumerate() {
         let tx = tx.clone();

@@ -21,6 +21,7 @@ pub mod scene;
 
 pub mod atrous;
 pub mod brute;
+pub mod direct;
 pub mod lgh;
 pub mod rays;
 

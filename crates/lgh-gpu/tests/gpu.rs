@@ -16,6 +16,8 @@ fn every_shader_is_valid_wgsl() {
         lgh_gpu::rays::source(),
         lgh_gpu::lgh::source(),
         lgh_gpu::atrous::source(),
+        lgh_gpu::direct::source(),
+        lgh_gpu::direct::composite_source(),
     ] {
         validate(&source);
     }

@@ -156,18 +156,19 @@ pub fn render_frame_with(
     let direct = if s.component == Component::Indirect || all_reflected {
         vec![Vec3::ZERO; g.len()]
     } else {
-        let out = t.time("direct", || {
-            let filter = &mut memory.direct_filter;
-            render_direct(
+        let out = t.time("direct", || match s.method.get().direct(world, &g, s) {
+            Ok(Some(out)) => Ok(out),
+            Ok(None) => Ok(render_direct(
                 world,
                 &g,
                 s.seed,
                 s.area_samples,
                 s.direct,
-                filter,
+                &mut memory.direct_filter,
                 progress,
-            )
-        });
+            )),
+            Err(e) => Err(e),
+        })?;
         t.0.extend(out.timings.0);
         out.radiance
     };

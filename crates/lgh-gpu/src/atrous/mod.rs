@@ -11,6 +11,7 @@ use rayon::prelude::*;
 
 use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
+use crate::pool::Lease;
 
 /// `Params` of the shader.
 #[repr(C)]
@@ -19,17 +20,74 @@ struct Params {
     width: u32,
     height: u32,
     step: u32,
-    _pad: u32,
+    geo_stride: u32,
     inv_c: f32,
     inv_n: f32,
     inv_p: f32,
-    _pad2: f32,
+    _pad: f32,
 }
 
 /// The WGSL source of the kernel.
 #[must_use]
 pub fn source() -> String {
     include_str!("../shaders/atrous.wgsl").to_owned()
+}
+
+/// The G-buffer as the filter reads it: per pixel `stride` vec4s, the position (w: 1 where
+/// the pixel sees a surface) first, the normal second.
+pub(crate) struct Geometry<'a> {
+    /// The buffer.
+    pub buffer: &'a Lease<'a>,
+    /// Vec4s per pixel.
+    pub stride: u32,
+    /// Image width and height.
+    pub size: (u32, u32),
+}
+
+/// Records the filter's passes into `batch` (timed as `name`) over the images `pair`
+/// (per pixel S with its guide in w, then U), the input in `pair[0]`, the two buffers taking
+/// turns; returns the index in `pair` of the filtered images.
+///
+/// # Errors
+/// The image exceeds one dispatch.
+pub(crate) fn record(
+    ctx: &GpuContext,
+    batch: &mut Batch<'_>,
+    name: &'static str,
+    geo: &Geometry<'_>,
+    pair: [&Lease<'_>; 2],
+    params: &AtrousParams,
+) -> Result<usize, GpuError> {
+    let passes = params.passes.min(12) as usize;
+    let pipeline = ctx.pipeline("atrous", source);
+    let (width, height) = geo.size;
+    for pass in 0..passes {
+        let uniform = ctx.uniform(
+            "a-trous pass",
+            &Params {
+                width,
+                height,
+                step: 1 << pass,
+                geo_stride: geo.stride,
+                inv_c: 4f32.powi(pass as i32) / params.c_phi,
+                inv_n: 1.0 / params.n_phi,
+                inv_p: 1.0 / params.p_phi,
+                _pad: 0.0,
+            },
+        );
+        let (from, to) = (pair[pass % 2], pair[1 - pass % 2]);
+        let bind = ctx.bind_group(
+            &pipeline,
+            vec![
+                uniform.as_entire_binding(),
+                geo.buffer.binding(),
+                from.binding(),
+                to.binding(),
+            ],
+        );
+        batch.dispatch(name, &pipeline, &bind, (width * height) as usize)?;
+    }
+    Ok(passes % 2)
 }
 
 /// Filters `s` and `u` (per pixel of `g`) in place with `params`, on the GPU; pixels that see
@@ -45,8 +103,7 @@ pub fn filter_ratio_pair(
     params: &AtrousParams,
 ) -> Result<(), GpuError> {
     let n = g.len();
-    let passes = params.passes.min(12);
-    if passes == 0 || n == 0 {
+    if params.passes == 0 || n == 0 {
         return Ok(());
     }
     let geo: Vec<[Vec4; 2]> = (0..n)
@@ -62,45 +119,25 @@ pub fn filter_ratio_pair(
         .map(|(&s, &u)| [s.extend(filter_guide(s, u)), u.extend(0.0)])
         .collect();
     let geo = ctx.upload("a-trous geometry", &geo)?;
-    let buffers = [
+    let pair = [
         ctx.upload("a-trous S, U", &values)?,
         ctx.output("a-trous S, U (next)", 32 * n as u64)?,
     ];
-    let pipeline = ctx.pipeline("atrous", source);
-    // Every pass's uniform and bind group first: the passes then run in one submission.
-    let uniforms: Vec<wgpu::Buffer> = (0..passes)
-        .map(|pass| {
-            ctx.uniform(
-                "a-trous pass",
-                &Params {
-                    width: g.width,
-                    height: g.height,
-                    step: 1 << pass,
-                    _pad: 0,
-                    inv_c: 4f32.powi(pass as i32) / params.c_phi,
-                    inv_n: 1.0 / params.n_phi,
-                    inv_p: 1.0 / params.p_phi,
-                    _pad2: 0.0,
-                },
-            )
-        })
-        .collect();
     let mut batch = Batch::new(ctx);
-    for (pass, uniform) in uniforms.iter().enumerate() {
-        let (from, to) = (&buffers[pass % 2], &buffers[1 - pass % 2]);
-        let bind = ctx.bind_group(
-            &pipeline,
-            vec![
-                uniform.as_entire_binding(),
-                geo.binding(),
-                from.binding(),
-                to.binding(),
-            ],
-        );
-        batch.dispatch("shadow_filter", &pipeline, &bind, n)?;
-    }
-    let last = &buffers[passes as usize % 2];
-    batch.read(last.buffer(), last.bytes())?;
+    let geometry = Geometry {
+        buffer: &geo,
+        stride: 2,
+        size: (g.width, g.height),
+    };
+    let last = record(
+        ctx,
+        &mut batch,
+        "shadow_filter",
+        &geometry,
+        [&pair[0], &pair[1]],
+        params,
+    )?;
+    batch.read(pair[last].buffer(), pair[last].bytes())?;
     let (reads, _) = batch.finish()?;
     let out: &[[Vec4; 2]] = reads
         .first()

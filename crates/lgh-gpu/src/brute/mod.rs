@@ -12,6 +12,7 @@ use std::f32::consts::FRAC_1_PI;
 use glam::{Vec3, Vec4};
 use lgh_render::memory::FrameMemory;
 use lgh_render::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
+use lgh_render::passes::gbuffer::GBuffer;
 use lgh_render::settings::RenderError;
 
 use bytemuck::Zeroable;
@@ -62,6 +63,15 @@ impl IndirectMethod for GpuBrute {
 
     fn about(&self) -> &'static str {
         "Every pixel sums every VPL (with an exact shadow ray each unless unshadowed), on the GPU"
+    }
+
+    fn direct(
+        &self,
+        world: &lgh_render::World,
+        g: &GBuffer,
+        s: &lgh_render::RenderSettings,
+    ) -> Result<Option<lgh_render::direct::DirectOutput>, RenderError> {
+        crate::direct::method_direct(world, g, s)
     }
 
     fn render(&self, i: &MethodInputs, _: &mut FrameMemory) -> Result<MethodOutput, RenderError> {

@@ -14,7 +14,6 @@
 use std::time::Instant;
 
 use glam::{Vec3, Vec4};
-use rayon::prelude::*;
 use lgh_render::denoise::atrous::AtrousParams;
 use lgh_render::memory::FrameMemory;
 use lgh_render::methods::lgh::settings::Selection;
@@ -27,6 +26,7 @@ use lgh_render::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
 use lgh_render::passes::gbuffer::GBuffer;
 use lgh_render::settings::RenderError;
 use lgh_render::shading::shadow_pass::ShadowEstimates;
+use rayon::prelude::*;
 
 use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
@@ -59,6 +59,15 @@ impl IndirectMethod for GpuLgh {
 
     fn default_shadow_samples(&self) -> u32 {
         self.cpu.get().default_shadow_samples()
+    }
+
+    fn direct(
+        &self,
+        world: &lgh_render::World,
+        g: &GBuffer,
+        s: &lgh_render::RenderSettings,
+    ) -> Result<Option<lgh_render::direct::DirectOutput>, RenderError> {
+        crate::direct::method_direct(world, g, s)
     }
 
     fn render(

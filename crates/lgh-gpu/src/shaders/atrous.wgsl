@@ -10,7 +10,8 @@ struct Params {
     width: u32,
     height: u32,
     step: u32,
-    _pad: u32,
+    // vec4s per pixel in `geo`: the position (w: 1 where it sees a surface), then the normal.
+    geo_stride: u32,
     inv_c: f32,
     inv_n: f32,
     inv_p: f32,
@@ -18,7 +19,7 @@ struct Params {
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
-// Per pixel: position (w: 1 where it sees a surface), normal.
+// Per pixel, params.geo_stride vec4s: position (w: 1 where it sees a surface), normal.
 @group(0) @binding(1) var<storage, read> geo: array<vec4<f32>>;
 // Per pixel: S (w: the guide), U.
 @group(0) @binding(2) var<storage, read> src: array<vec4<f32>>;
@@ -46,7 +47,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (p >= w * params.height) {
         return;
     }
-    if (geo[2u * p].w == 0.0) {
+    if (geo[params.geo_stride * p].w == 0.0) {
         dst[2u * p] = src[2u * p];
         dst[2u * p + 1u] = src[2u * p + 1u];
         return;
@@ -54,8 +55,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var h1 = array<f32, 5>(1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0);
     let x = i32(p % w);
     let y = i32(p / w);
-    let xp = geo[2u * p].xyz;
-    let np = geo[2u * p + 1u].xyz;
+    let xp = geo[params.geo_stride * p].xyz;
+    let np = geo[params.geo_stride * p + 1u].xyz;
     let gp = src[2u * p].w;
     let step = i32(params.step);
     var s = vec3<f32>(0.0);
@@ -72,12 +73,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 continue;
             }
             let q = u32(qy) * w + u32(qx);
-            let gq = geo[2u * q];
+            let gq = geo[params.geo_stride * q];
             if (gq.w == 0.0) {
                 continue;
             }
             let dg = gp - src[2u * q].w;
-            let dn = np - geo[2u * q + 1u].xyz;
+            let dn = np - geo[params.geo_stride * q + 1u].xyz;
             let dx = xp - gq.xyz;
             let e = dg * dg * params.inv_c + dot(dn, dn) * params.inv_n + dot(dx, dx) * params.inv_p;
             if (!(e < NEGLIGIBLE)) {

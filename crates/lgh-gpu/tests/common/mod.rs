@@ -1,4 +1,5 @@
-//! What the GPU tests share: the scenes they run on.
+//! What the GPU tests share: the scenes they run on (each test file uses part of it).
+#![allow(dead_code)]
 
 use lgh_render::World;
 

@@ -173,6 +173,20 @@ pub trait IndirectMethod: Sync + Send {
         inputs: &MethodInputs,
         memory: &mut FrameMemory,
     ) -> Result<MethodOutput, RenderError>;
+    /// The frame's direct light ([`crate::direct::render_direct`]'s output for `g` with the
+    /// settings `s`) computed by this method's own backend, or `Ok(None)`, the default, for
+    /// the CPU's pass. lgh-gpu's methods run it on the GPU.
+    ///
+    /// # Errors
+    /// The backend failed.
+    fn direct(
+        &self,
+        _world: &World,
+        _g: &GBuffer,
+        _s: &RenderSettings,
+    ) -> Result<Option<crate::direct::DirectOutput>, RenderError> {
+        Ok(None)
+    }
 }
 
 /// A registered method: a handle to a `'static` [`IndirectMethod`], compared by name.

@@ -161,6 +161,13 @@ impl LightSet {
         }
     }
 
+    /// The emitters' distribution by radiance x area ([`LightSet::sample_emitter`]'s
+    /// first choice), `None` without emitters; for backends that sample them elsewhere.
+    #[must_use]
+    pub fn emitter_distribution(&self) -> Option<&Distribution1D> {
+        self.by_radiant_area.as_ref()
+    }
+
     /// Total emitted power of all lights.
     #[must_use]
     pub fn total_power(&self) -> Vec3 {
