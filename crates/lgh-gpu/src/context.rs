@@ -3,6 +3,7 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
+use crate::gbuffer::GBufferCache;
 use crate::pool::BufferPool;
 use crate::scene::GpuScene;
 
@@ -54,6 +55,8 @@ pub struct GpuContext {
     pipelines: Mutex<HashMap<&'static str, Arc<wgpu::ComputePipeline>>>,
     /// Buffers kept between frames ([`GpuContext::lease`]).
     pool: BufferPool,
+    /// The last uploaded G-buffer ([`GpuContext::gbuffer`]).
+    gbuffers: GBufferCache,
 }
 
 impl GpuContext {
@@ -92,6 +95,7 @@ impl GpuContext {
             scene: Mutex::default(),
             pipelines: Mutex::default(),
             pool: BufferPool::default(),
+            gbuffers: GBufferCache::default(),
         })
     }
 
@@ -228,6 +232,11 @@ impl GpuContext {
             layout: &pipeline.get_bind_group_layout(0),
             entries: &entries,
         })
+    }
+
+    /// The cache of the last uploaded G-buffer.
+    pub(crate) fn gbuffers(&self) -> &GBufferCache {
+        &self.gbuffers
     }
 
     /// The pool of buffers kept between frames.

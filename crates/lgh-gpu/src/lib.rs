@@ -16,6 +16,7 @@
 
 pub mod batch;
 mod context;
+pub mod gbuffer;
 pub mod pool;
 pub mod scene;
 

@@ -9,6 +9,8 @@ use std::collections::HashMap;
 use std::num::NonZeroU64;
 use std::sync::{Mutex, PoisonError};
 
+use rayon::prelude::*;
+
 use crate::context::{GpuContext, GpuError};
 
 /// The free buffers, by label and usage.
@@ -16,6 +18,10 @@ use crate::context::{GpuContext, GpuError};
 pub(crate) struct BufferPool {
     free: Mutex<HashMap<(&'static str, u32), Vec<wgpu::Buffer>>>,
 }
+
+/// Bytes per piece of [`GpuContext::write_parallel`] (a multiple of 64, the largest element
+/// a kernel reads, so that a piece holds whole elements).
+pub(crate) const WRITE_PIECE: usize = 1 << 20;
 
 /// Free buffers kept per label and usage (two frames at once, and room).
 const KEPT: usize = 2;
@@ -145,19 +151,45 @@ impl GpuContext {
     ) -> Result<Lease<'_>, GpuError> {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         let lease = self.lease(label, bytes.len() as u64, Self::STORAGE)?;
-        let mut padded = [0u8; 16];
-        let whole = bytes.len().next_multiple_of(4);
-        if bytes.len() == whole && !bytes.is_empty() {
-            self.queue.write_buffer(lease.buffer(), 0, bytes);
-        } else if bytes.len() < 16 {
-            padded[..bytes.len()].copy_from_slice(bytes);
-            self.queue.write_buffer(lease.buffer(), 0, &padded);
-        } else {
-            let mut v = bytes.to_vec();
-            v.resize(whole, 0);
-            self.queue.write_buffer(lease.buffer(), 0, &v);
-        }
+        self.write_parallel(lease.buffer(), lease.bytes(), |at, out| {
+            let from = bytes.get(at..).unwrap_or_default();
+            let n = from.len().min(out.len());
+            out[..n].copy_from_slice(&from[..n]);
+            out[n..].fill(0);
+        });
         Ok(lease)
+    }
+
+    /// Writes the first `bytes` of `buffer` through the queue's staging memory (they arrive
+    /// before the next submitted work), filled in parallel pieces: `fill(at, out)` writes
+    /// bytes `at..at + out.len()` (pieces of [`WRITE_PIECE`] bytes, the last shorter). One
+    /// thread's copy of a frame's tens of megabytes took milliseconds.
+    pub(crate) fn write_parallel(
+        &self,
+        buffer: &wgpu::Buffer,
+        bytes: u64,
+        fill: impl Fn(usize, &mut [u8]) + Sync,
+    ) {
+        let Some(size) = std::num::NonZeroU64::new(bytes) else {
+            return;
+        };
+        let Some(mut view) = self.queue.write_buffer_with(buffer, 0, size) else {
+            return;
+        };
+        // Whole pieces as arrays (a write-only slice cannot cross threads; an array can),
+        // the rest on this thread.
+        let (whole, mut rest) = view.slice(..).into_chunks::<WRITE_PIECE>();
+        let pieces: Vec<wgpu::WriteOnly<'_, [u8; WRITE_PIECE]>> = whole.into_iter().collect();
+        let tail = pieces.len() * WRITE_PIECE;
+        pieces.into_par_iter().enumerate().for_each(|(i, piece)| {
+            let mut piece: wgpu::WriteOnly<'_, [u8]> = piece.into();
+            let mut tmp = vec![0u8; WRITE_PIECE];
+            fill(i * WRITE_PIECE, &mut tmp);
+            piece.copy_from_slice(&tmp);
+        });
+        let mut tmp = vec![0u8; rest.len()];
+        fill(tail, &mut tmp);
+        rest.copy_from_slice(&tmp);
     }
 
     /// A storage buffer (leased) of `bytes` that a kernel writes in full.

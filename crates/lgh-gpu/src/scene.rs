@@ -102,25 +102,3 @@ impl GpuScene {
         })
     }
 }
-
-/// The G-buffer as the kernels read it (`Pixel` in their WGSL), one `[vec4; 4]` per pixel:
-/// position (w: 1 where the pixel sees a surface), shading normal, geometric normal, albedo
-/// (w: `albedo_w(p)`, a kernel's own word, e.g. lgh's light list as bits).
-#[must_use]
-pub fn pack_gbuffer(
-    g: &lgh_render::passes::gbuffer::GBuffer,
-    albedo_w: impl Fn(usize) -> f32 + Sync,
-) -> Vec<[Vec4; 4]> {
-    use rayon::prelude::*;
-    (0..g.len())
-        .into_par_iter()
-        .map(|p| {
-            [
-                g.position[p].extend(if g.is_hit(p) { 1.0 } else { 0.0 }),
-                g.normal[p].extend(0.0),
-                g.geo_normal[p].extend(0.0),
-                g.albedo[p].extend(albedo_w(p)),
-            ]
-        })
-        .collect()
-}

@@ -322,3 +322,44 @@ fn frames_map_to_gpu_methods_where_the_gpu_runs_their_settings() {
     s.method = BRUTE;
     assert_eq!(lgh_gpu::gpu_method_for(&s), Some(lgh_gpu::brute::BRUTE_GPU));
 }
+
+/// The context's G-buffer cache: the same planes give the uploaded buffer again; a G-buffer
+/// differing in one pixel's albedo, or in size, gives a new upload. And an upload larger
+/// than one parallel piece, not a whole number of them, reads back as it went up.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn uploads_arrive_whole_and_the_gbuffer_is_reused_only_while_unchanged() {
+    // A context of its own: the tests beside this one upload their G-buffers to the shared.
+    let ctx = &lgh_gpu::GpuContext::new().expect("an adapter");
+    let w = world(None);
+    let camera = w.scene.camera().frame(40, 30);
+    let g = lgh_render::passes::gbuffer::GBuffer::render(&w, &camera, 40, 30);
+    let a = ctx.gbuffer(&g).expect("upload");
+    let b = ctx.gbuffer(&g.clone()).expect("upload");
+    assert!(std::sync::Arc::ptr_eq(&a, &b), "same planes, same buffer");
+    let mut changed = g.clone();
+    changed.albedo[517].x += 0.25;
+    let c = ctx.gbuffer(&changed).expect("upload");
+    assert!(
+        !std::sync::Arc::ptr_eq(&a, &c),
+        "a changed pixel is uploaded"
+    );
+    let smaller = lgh_render::passes::gbuffer::GBuffer::render(&w, &camera, 40, 29);
+    let d = ctx.gbuffer(&smaller).expect("upload");
+    assert!(!std::sync::Arc::ptr_eq(&c, &d), "a new size is uploaded");
+
+    let data: Vec<u32> = (0..700_001u32)
+        .map(|i| i.wrapping_mul(2_654_435_761))
+        .collect();
+    let up = ctx.upload("upload test", &data).expect("upload");
+    let mut batch = lgh_gpu::Batch::new(ctx);
+    batch
+        .read(up.buffer(), 4 * data.len() as u64)
+        .expect("read");
+    let (reads, _) = batch.finish().expect("gpu");
+    let back: &[u32] = bytemuck::cast_slice(&reads[0]);
+    assert_eq!(&back[..data.len()], &data[..]);
+}

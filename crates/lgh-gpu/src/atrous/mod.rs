@@ -37,7 +37,7 @@ pub fn source() -> String {
 /// the pixel sees a surface) first, the normal second.
 pub(crate) struct Geometry<'a> {
     /// The buffer.
-    pub buffer: &'a Lease<'a>,
+    pub buffer: &'a wgpu::Buffer,
     /// Vec4s per pixel.
     pub stride: u32,
     /// Image width and height.
@@ -80,7 +80,7 @@ pub(crate) fn record(
             &pipeline,
             vec![
                 uniform.as_entire_binding(),
-                geo.buffer.binding(),
+                geo.buffer.as_entire_binding(),
                 from.binding(),
                 to.binding(),
             ],
@@ -106,27 +106,20 @@ pub fn filter_ratio_pair(
     if params.passes == 0 || n == 0 {
         return Ok(());
     }
-    let geo: Vec<[Vec4; 2]> = (0..n)
-        .into_par_iter()
-        .map(|p| {
-            let hit = if g.is_hit(p) { 1.0 } else { 0.0 };
-            [g.position[p].extend(hit), g.normal[p].extend(0.0)]
-        })
-        .collect();
     let values: Vec<[Vec4; 2]> = s
         .par_iter()
         .zip(u.par_iter())
         .map(|(&s, &u)| [s.extend(filter_guide(s, u)), u.extend(0.0)])
         .collect();
-    let geo = ctx.upload("a-trous geometry", &geo)?;
+    let gbuffer = ctx.gbuffer(g)?;
     let pair = [
         ctx.upload("a-trous S, U", &values)?,
         ctx.output("a-trous S, U (next)", 32 * n as u64)?,
     ];
     let mut batch = Batch::new(ctx);
     let geometry = Geometry {
-        buffer: &geo,
-        stride: 2,
+        buffer: gbuffer.buffer(),
+        stride: 4,
         size: (g.width, g.height),
     };
     let last = record(

@@ -19,7 +19,6 @@ use bytemuck::Zeroable;
 
 use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
-use crate::scene::pack_gbuffer;
 
 /// Every pixel sums every VPL with an exact shadow ray, on the GPU.
 pub const BRUTE_GPU: Method = Method::new(&GpuBrute { shadowed: true });
@@ -113,7 +112,6 @@ fn render_brute(ctx: &GpuContext, i: &MethodInputs, shadows: bool) -> Result<Vec
     let (g, vpls) = (i.gbuffer, i.vpls);
     let n = g.len();
     let scene = ctx.scene(i.world)?;
-    let pixels = pack_gbuffer(g, |_| 0.0);
     let vpl_data: Vec<[Vec4; 3]> = (0..vpls.len())
         .map(|j| {
             [
@@ -126,7 +124,7 @@ fn render_brute(ctx: &GpuContext, i: &MethodInputs, shadows: bool) -> Result<Vec
     if vpls.is_empty() {
         return Ok(vec![Vec4::ZERO; n]);
     }
-    let gbuffer = ctx.upload("g-buffer", &pixels)?;
+    let gbuffer = ctx.gbuffer(g)?;
     let vpl_buf = ctx.upload("vpls", &vpl_data)?;
     let out = ctx.output("irradiance", 16 * n as u64)?;
     let params = ctx.uniform("brute params", &Params::zeroed());

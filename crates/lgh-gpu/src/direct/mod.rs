@@ -25,7 +25,6 @@ use lgh_scene::Light;
 use crate::atrous::{Geometry, record};
 use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
-use crate::scene::pack_gbuffer;
 
 /// Area samples per pixel the GPU pass takes at most (more run on the CPU).
 pub const MAX_AREA_SAMPLES: u32 = 4096;
@@ -223,7 +222,7 @@ pub fn render_direct(
     let n = g.len();
     let scene = ctx.scene(world)?;
     let tables = LightTables::new(world, s, n as u32);
-    let gbuf = ctx.upload("g-buffer", &pack_gbuffer(g, |_| 0.0))?;
+    let gbuf = ctx.gbuffer(g)?;
     let table = ctx.upload("direct lights", &tables.words)?;
     let lit = ctx.output("direct rest, analytic", 32 * n as u64)?;
     let pair = [
@@ -250,7 +249,7 @@ pub fn render_direct(
     let any_analytic = tables.params.analytic > 0;
     let last = if any_analytic {
         let geometry = Geometry {
-            buffer: &gbuf,
+            buffer: gbuf.buffer(),
             stride: 4,
             size: (g.width, g.height),
         };

@@ -4,11 +4,9 @@
 use glam::Vec4;
 use lgh_render::methods::MethodInputs;
 use lgh_render::methods::lgh::tables::LghTables;
-use lgh_render::passes::gbuffer::GBuffer;
 use rayon::prelude::*;
 
 use crate::context::GpuError;
-use crate::scene::pack_gbuffer;
 
 /// Hierarchies the uniform holds (the six normal bins, and room).
 pub(super) const MAX_HIERARCHIES: usize = 8;
@@ -41,23 +39,22 @@ pub(super) struct Params {
     hierarchies: u32,
     list_lights: u32,
     order: u32,
+    pixel_lists: u32,
     eps2: f32,
     ray_eps: f32,
     seed_lo: u32,
     seed_hi: u32,
-    _pad: [u32; 3],
+    _pad: [u32; 2],
     hier: [Hier; MAX_HIERARCHIES],
 }
 
 /// The storage buffers' contents.
 pub(super) struct Tables {
-    /// Per pixel: position (w: seen), normal, geometric normal, albedo (w: its light list).
-    pub(super) pixels: Vec<[Vec4; 4]>,
     /// Per shaded light: position and reach^2, normal and isotropic share, intensity and
     /// radius, blending floors with level and vertex x.
     pub(super) lights: Vec<[Vec4; 4]>,
     /// The lists' starts, then their lights, then the pixels in the order the invocations
-    /// take them ([`pixel_order`]).
+    /// take them ([`pixel_order`]), then each pixel's list.
     pub(super) lists: Vec<u32>,
     /// Per hierarchy: vertex-row starts of levels 1..=l_max, descent starts, descent
     /// children as (child, bits of the running sum), and per S_1 light its [`SLOTS`]
@@ -70,15 +67,14 @@ pub(super) struct Tables {
 }
 
 impl Tables {
-    /// Packs `t` for the pixels of `g`.
-    pub(super) fn new(g: &GBuffer, t: &LghTables) -> Result<Self, GpuError> {
+    /// Packs `t`.
+    pub(super) fn new(t: &LghTables) -> Result<Self, GpuError> {
         if t.hierarchies.len() > MAX_HIERARCHIES {
             return Err(GpuError::TooLarge(format!(
                 "{} hierarchies (at most {MAX_HIERARCHIES})",
                 t.hierarchies.len()
             )));
         }
-        let pixels = pack_gbuffer(g, |p| f32::from_bits(t.bins.list[p]));
         let mut lights: Vec<[Vec4; 4]> = t
             .lights
             .par_iter()
@@ -100,6 +96,7 @@ impl Tables {
             &t.bins.list,
             t.bins.offsets.len().saturating_sub(1),
         ));
+        lists.extend_from_slice(&t.bins.list);
         let (mut words, mut reps, mut hier) = (Vec::new(), Vec::new(), Vec::new());
         for h in &t.hierarchies {
             let grid = h.grid;
@@ -151,7 +148,6 @@ impl Tables {
             return Err(GpuError::TooLarge("hierarchy tables".into()));
         }
         Ok(Self {
-            pixels,
             lights,
             lists,
             words,
@@ -165,6 +161,7 @@ impl Params {
     /// The uniform of a frame with inputs `i`, loop inputs `t` and packed tables `p`.
     pub(super) fn new(i: &MethodInputs, t: &LghTables, p: &Tables) -> Result<Self, GpuError> {
         let order = (t.bins.offsets.len() + t.bins.lights.len()) as u32;
+        let pixel_lists = order + t.bins.list.len() as u32;
         let mut hier = [Hier::default(); MAX_HIERARCHIES];
         hier[..p.hier.len()].copy_from_slice(&p.hier);
         let seed = i.settings.seed;
@@ -175,11 +172,12 @@ impl Params {
             hierarchies: p.hier.len() as u32,
             list_lights: t.bins.offsets.len() as u32,
             order,
+            pixel_lists,
             eps2: t.eps2,
             ray_eps: i.world.ray_epsilon,
             seed_lo: seed as u32,
             seed_hi: (seed >> 32) as u32,
-            _pad: [0; 3],
+            _pad: [0; 2],
             hier,
         })
     }

@@ -38,13 +38,14 @@ struct Params {
     list_lights: u32,
     // Where the pixel order starts in `lists`: invocation i shades pixel lists[order + i].
     order: u32,
+    // Where each pixel's list starts in `lists`: pixel i's is lists[pixel_lists + i].
+    pixel_lists: u32,
     eps2: f32,
     ray_eps: f32,
     seed_lo: u32,
     seed_hi: u32,
     _p0: u32,
     _p1: u32,
-    _p2: u32,
     hier: array<Hier, 8>,
 }
 
@@ -52,7 +53,6 @@ struct Pixel {
     position: vec4<f32>,
     normal: vec4<f32>,
     geo_normal: vec4<f32>,
-    // rgb: albedo; w: the pixel's light list (bits of a u32).
     albedo: vec4<f32>,
 }
 
@@ -71,7 +71,8 @@ struct Light {
 @group(0) @binding(3) var<storage, read> gbuffer: array<Pixel>;
 @group(0) @binding(4) var<storage, read> lights: array<Light>;
 // The lists' starts, then their lights (from params.list_lights), then the pixels sorted by
-// list (from params.order), so that a workgroup's threads read the same lights.
+// list (from params.order), so that a workgroup's threads read the same lights, then each
+// pixel's list (from params.pixel_lists).
 @group(0) @binding(5) var<storage, read> lists: array<u32>;
 // Per hierarchy: vertex-row starts, descent starts, descent children as (child, bits of the
 // running sum), then per S_1 light its SLOTS representatives (indices into its VPLs).
@@ -356,7 +357,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let x = px.position.xyz;
     let n = px.normal.xyz;
     let ng = px.geo_normal.xyz;
-    let list = bitcast<u32>(px.albedo.w);
+    let list = lists[params.pixel_lists + i];
     let first = lists[list];
     let last = lists[list + 1u];
     // The lighting loop: A, the overdraw and the candidates' total weight W.

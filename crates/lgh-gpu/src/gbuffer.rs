@@ -1,0 +1,140 @@
+//! The frame's G-buffer on the GPU, shared by the frame's passes (direct light, the lighting
+//! loop, the filters) and kept from frame to frame while it does not change: the viewer's
+//! G-buffer stands still with its camera, and uploading its 59 MB (1280x720) took longer
+//! than the passes that read it on an H200 (docs/performance.md). The cache compares the
+//! frame's planes with a copy of the last uploaded ones, byte for byte (in parallel), so a
+//! changed G-buffer is never mistaken for the last.
+
+use std::sync::{Arc, Mutex, PoisonError};
+
+use glam::Vec3;
+use lgh_render::passes::gbuffer::GBuffer;
+use rayon::prelude::*;
+
+use crate::context::{GpuContext, GpuError};
+
+/// Bytes per pixel of the packed G-buffer (`Pixel` in the kernels' WGSL).
+const PIXEL_BYTES: u64 = 64;
+
+/// The G-buffer as the kernels read it (`Pixel` in their WGSL), one `[vec4; 4]` per pixel,
+/// packed into `bytes`: position (w: 1 where the pixel sees a surface), shading
+/// normal, geometric normal, albedo; `bytes` holds pixels from `first` on.
+fn pack_into(g: &GBuffer, first: usize, bytes: &mut [u8]) {
+    for (k, out) in bytes.chunks_exact_mut(PIXEL_BYTES as usize).enumerate() {
+        let p = first + k;
+        if p >= g.len() {
+            out.fill(0);
+            continue;
+        }
+        let hit = if g.is_hit(p) { 1.0 } else { 0.0 };
+        let px = [
+            g.position[p].extend(hit),
+            g.normal[p].extend(0.0),
+            g.geo_normal[p].extend(0.0),
+            g.albedo[p].extend(0.0),
+        ];
+        out.copy_from_slice(bytemuck::bytes_of(&px));
+    }
+}
+
+/// A G-buffer on the GPU.
+#[derive(Debug)]
+pub struct GpuGBuffer {
+    buffer: wgpu::Buffer,
+    /// The planes it was packed from: width, height, and position, normal, geometric normal,
+    /// albedo and depth as bytes.
+    planes: (u32, u32, [Vec<u8>; 5]),
+}
+
+impl GpuGBuffer {
+    /// Its binding (`array<Pixel>`).
+    #[must_use]
+    pub fn binding(&self) -> wgpu::BindingResource<'_> {
+        self.buffer.as_entire_binding()
+    }
+
+    /// The buffer.
+    #[must_use]
+    pub fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+
+    /// True if it was packed from exactly the planes of `g`.
+    fn holds(&self, g: &GBuffer) -> bool {
+        let (w, h, planes) = &self.planes;
+        *w == g.width
+            && *h == g.height
+            && plane_bytes(g)
+                .iter()
+                .zip(planes)
+                .all(|(a, b)| a.len() == b.len() && same(a, b))
+    }
+}
+
+/// The bytes of the planes the packed G-buffer depends on.
+fn plane_bytes(g: &GBuffer) -> [&[u8]; 5] {
+    [
+        bytemuck::cast_slice::<Vec3, u8>(&g.position),
+        bytemuck::cast_slice::<Vec3, u8>(&g.normal),
+        bytemuck::cast_slice::<Vec3, u8>(&g.geo_normal),
+        bytemuck::cast_slice::<Vec3, u8>(&g.albedo),
+        bytemuck::cast_slice::<f32, u8>(&g.depth),
+    ]
+}
+
+/// `a == b`, compared in parallel.
+fn same(a: &[u8], b: &[u8]) -> bool {
+    a.par_chunks(1 << 16)
+        .zip(b.par_chunks(1 << 16))
+        .all(|(x, y)| x == y)
+}
+
+/// The context's last uploaded G-buffer.
+#[derive(Debug, Default)]
+pub(crate) struct GBufferCache {
+    last: Mutex<Option<Arc<GpuGBuffer>>>,
+}
+
+impl GpuContext {
+    /// `g` on the GPU: the last uploaded G-buffer if `g` has the same planes, else `g`
+    /// packed (in parallel, straight into the upload's staging memory) and uploaded.
+    ///
+    /// # Errors
+    /// Larger than the adapter's largest storage buffer.
+    pub fn gbuffer(&self, g: &GBuffer) -> Result<Arc<GpuGBuffer>, GpuError> {
+        let cache = &self.gbuffers().last;
+        if let Some(last) = cache
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .as_ref()
+            .filter(|last| last.holds(g))
+        {
+            return Ok(Arc::clone(last));
+        }
+        let bytes = (g.len() as u64 * PIXEL_BYTES).max(PIXEL_BYTES);
+        if bytes > self.limits.max_storage_buffer_binding_size {
+            return Err(GpuError::TooLarge(format!(
+                "the G-buffer: {} MB exceed the adapter's largest storage buffer ({} MB)",
+                bytes >> 20,
+                self.limits.max_storage_buffer_binding_size >> 20
+            )));
+        }
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("g-buffer"),
+            size: bytes,
+            usage: Self::STORAGE,
+            mapped_at_creation: false,
+        });
+        self.write_parallel(&buffer, bytes, |at, out| {
+            pack_into(g, at / PIXEL_BYTES as usize, out);
+        });
+        let (w, h) = (g.width, g.height);
+        let planes = plane_bytes(g).map(<[u8]>::to_vec);
+        let up = Arc::new(GpuGBuffer {
+            buffer,
+            planes: (w, h, planes),
+        });
+        *cache.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::clone(&up));
+        Ok(up)
+    }
+}
