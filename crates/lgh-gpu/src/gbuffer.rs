@@ -18,7 +18,8 @@ const PIXEL_BYTES: u64 = 64;
 
 /// The G-buffer as the kernels read it (`Pixel` in their WGSL), one `[vec4; 4]` per pixel,
 /// packed into `bytes`: position (w: 1 where the pixel sees a surface), shading
-/// normal, geometric normal, albedo; `bytes` holds pixels from `first` on.
+/// normal, geometric normal, albedo (w: the linear depth where the pixel sees a surface);
+/// `bytes` holds pixels from `first` on.
 fn pack_into(g: &GBuffer, first: usize, bytes: &mut [u8]) {
     for (k, out) in bytes.chunks_exact_mut(PIXEL_BYTES as usize).enumerate() {
         let p = first + k;
@@ -31,7 +32,7 @@ fn pack_into(g: &GBuffer, first: usize, bytes: &mut [u8]) {
             g.position[p].extend(hit),
             g.normal[p].extend(0.0),
             g.geo_normal[p].extend(0.0),
-            g.albedo[p].extend(0.0),
+            g.albedo[p].extend(if g.is_hit(p) { g.depth[p] } else { 0.0 }),
         ];
         out.copy_from_slice(bytemuck::bytes_of(&px));
     }

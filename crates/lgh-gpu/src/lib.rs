@@ -17,6 +17,7 @@
 pub mod batch;
 mod context;
 pub mod gbuffer;
+pub mod interleave;
 pub mod pool;
 pub mod scene;
 
@@ -24,6 +25,7 @@ pub mod atrous;
 pub mod brute;
 pub mod direct;
 pub mod lgh;
+pub mod ratio;
 pub mod rays;
 
 pub use batch::Batch;

@@ -18,6 +18,9 @@ fn every_shader_is_valid_wgsl() {
         lgh_gpu::atrous::source(),
         lgh_gpu::direct::source(),
         lgh_gpu::direct::composite_source(),
+        lgh_gpu::interleave::blur_source(),
+        lgh_gpu::interleave::discontinuities_source(),
+        lgh_gpu::ratio::ratio_source(),
     ] {
         validate(&source);
     }

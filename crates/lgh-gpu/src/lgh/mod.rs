@@ -11,9 +11,11 @@
 //! representative targets drawn at the ray, stratified selection); other settings are
 //! refused with a clear error.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::{Vec3, Vec4};
+use lgh_core::timing::Timings;
 use lgh_render::denoise::atrous::AtrousParams;
 use lgh_render::memory::FrameMemory;
 use lgh_render::methods::lgh::settings::Selection;
@@ -28,10 +30,12 @@ use lgh_render::settings::RenderError;
 use lgh_render::shading::shadow_pass::ShadowEstimates;
 use rayon::prelude::*;
 
-use crate::batch::Batch;
+use crate::batch::{Batch, PassTimes};
 use crate::context::{GpuContext, GpuError};
+use crate::gbuffer::GpuGBuffer;
 use crate::pool::Lease;
 
+mod chain;
 mod upload;
 
 use upload::{Params, Tables};
@@ -91,6 +95,13 @@ impl IndirectMethod for GpuLgh {
         })?;
         let fail = |e: GpuError| RenderError::Backend(e.to_string());
         let ctx = GpuContext::shared().map_err(fail)?;
+        let filter = frame.ratio_filter(inputs);
+        if crate::ratio::supported(&filter) {
+            // The loop, the blur and the ratio estimator in one submission.
+            let (shadowed, overdraw, timings) =
+                chain::shade(ctx, inputs, &tables, &filter).map_err(fail)?;
+            return Ok(frame.finish_shadowed(inputs, shadowed, overdraw, timings));
+        }
         let shaded = lighting_loop(ctx, inputs, &tables).map_err(fail)?;
         Ok(frame.finish_with(inputs, shaded, memory, Some(gpu_atrous)))
     }
@@ -141,15 +152,24 @@ pub fn source() -> String {
     .concat()
 }
 
-/// The lighting loop of the frame whose inputs are `tables`, on the GPU: A, the overdraw, S
-/// and U of every pixel, with the loop's times: "lighting" (the loop with its shadow
-/// targets and rays, one GPU pass; from GPU timestamps where the adapter has them) and
-/// "gpu_transfer" (packing, upload and read-back).
-fn lighting_loop(
-    ctx: &GpuContext,
+/// The lighting loop recorded into a batch, with the buffers it reads and writes.
+pub(super) struct Loop<'c> {
+    pub batch: Batch<'c>,
+    /// Per pixel: A (w: overdraw), S (w: rays), U.
+    pub out: Lease<'c>,
+    pub gbuffer: Arc<GpuGBuffer>,
+    /// When the frame's GPU work began, and the milliseconds spent packing and uploading.
+    pub start: Instant,
+    pub upload_ms: f64,
+    _tables: Vec<Lease<'c>>,
+}
+
+/// Packs and uploads the loop's inputs `tables` and records the loop (timed "lighting").
+pub(super) fn record_loop<'c>(
+    ctx: &'c GpuContext,
     inputs: &MethodInputs,
     tables: &LghTables,
-) -> Result<LoopResult, GpuError> {
+) -> Result<Loop<'c>, GpuError> {
     let start = Instant::now();
     let g = inputs.gbuffer;
     let n = g.len();
@@ -158,7 +178,7 @@ fn lighting_loop(
     let params = Params::new(inputs, tables, &packed)?;
     let params = ctx.uniform("lgh params", &params);
     let gbuffer = ctx.gbuffer(g)?;
-    let buffers = [
+    let buffers = vec![
         ctx.upload("lights", &packed.lights)?,
         ctx.upload("light lists", &packed.lists)?,
         ctx.upload("hierarchy tables", &packed.words)?,
@@ -176,11 +196,59 @@ fn lighting_loop(
     resources.extend(buffers.iter().map(Lease::binding));
     resources.push(out.binding());
     let bind = ctx.bind_group(&pipeline, resources);
-    let upload_ms = start.elapsed().as_secs_f64() * 1e3;
     let mut batch = Batch::new(ctx);
     batch.dispatch("lighting", &pipeline, &bind, n)?;
+    Ok(Loop {
+        batch,
+        out,
+        gbuffer,
+        start,
+        upload_ms: start.elapsed().as_secs_f64() * 1e3,
+        _tables: buffers,
+    })
+}
+
+/// The GPU's pass times as the frame's timings, with "gpu_transfer" the rest of the wall
+/// time since `start` less `cpu_ms` (CPU work timed apart); without timestamps, "lighting"
+/// stands for all of the GPU's work.
+pub(super) fn gpu_timings(gpu: &PassTimes, start: Instant, upload_ms: f64, cpu_ms: f64) -> Timings {
+    let mut t = Timings::default();
+    let wall = start.elapsed().as_secs_f64() * 1e3 - cpu_ms;
+    if gpu.is_empty() {
+        t.push("lighting", (wall - upload_ms).max(0.0));
+        t.push("gpu_transfer", upload_ms);
+        return t;
+    }
+    for &(name, ms) in gpu {
+        t.push(name, ms);
+        if name == "lighting" {
+            // The kernel alone ("lighting" gets the CPU's preparation of the lights added).
+            t.push("lighting_kernel", ms);
+        }
+    }
+    let gpu_ms: f64 = gpu.iter().map(|(_, ms)| ms).sum();
+    t.push("gpu_transfer", (wall - gpu_ms).max(0.0));
+    t
+}
+
+/// The lighting loop of the frame whose inputs are `tables`, on the GPU, read back for the
+/// CPU's blur and ratio estimator: A, the overdraw, S and U of every pixel, with the
+/// timings of [`gpu_timings`].
+fn lighting_loop(
+    ctx: &GpuContext,
+    inputs: &MethodInputs,
+    tables: &LghTables,
+) -> Result<LoopResult, GpuError> {
+    let n = inputs.gbuffer.len();
+    let Loop {
+        mut batch,
+        out,
+        start,
+        upload_ms,
+        ..
+    } = record_loop(ctx, inputs, tables)?;
     batch.read(out.buffer(), out.bytes())?;
-    let (reads, gpu_ms) = batch.finish()?;
+    let (reads, gpu) = batch.finish()?;
     let result: &[Vec4] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
     let result = &result[..(3 * n).min(result.len())];
     let k = tables.k as usize;
@@ -190,17 +258,6 @@ fn lighting_loop(
         }
         result.par_chunks(3).map(|p| p[c].truncate()).collect()
     };
-    let mut timings = lgh_core::timing::Timings::default();
-    let total_ms = start.elapsed().as_secs_f64() * 1e3;
-    // The loop's own time from the GPU's timestamps where it has them (the wall time
-    // otherwise); the copies to and from the GPU apart.
-    let loop_ms = gpu_ms.first().map_or(total_ms - upload_ms, |&(_, ms)| ms);
-    timings.push("lighting", loop_ms);
-    // The kernel alone ("lighting" also holds the CPU's preparation of the shaded lights).
-    if let Some(&(_, ms)) = gpu_ms.first() {
-        timings.push("lighting_kernel", ms);
-    }
-    timings.push("gpu_transfer", (total_ms - loop_ms).max(0.0));
     Ok(LoopResult {
         a: plane(0),
         overdraw: result.par_chunks(3).map(|p| p[0].w as u32).collect(),
@@ -210,6 +267,6 @@ fn lighting_loop(
             u: plane(2),
             rays: result.par_chunks(3).map(|p| p[1].w as u64).sum(),
         },
-        timings,
+        timings: gpu_timings(&gpu, start, upload_ms, 0.0),
     })
 }

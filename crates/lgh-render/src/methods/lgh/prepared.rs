@@ -26,7 +26,8 @@ use crate::methods::lgh::light_batch::PackedLight;
 use crate::methods::{MethodInputs, MethodOutput};
 use crate::passes::par_filled;
 use crate::shading::ratio::{
-    AtrousBackend, RATIO_CORRECTION, RATIO_VISIBILITY, RatioFilter, shadowed_indirect_with,
+    AtrousBackend, RATIO_CORRECTION, RATIO_VISIBILITY, RatioFilter, Shadowed,
+    shadowed_indirect_with,
 };
 use crate::shading::reservoirs::ReservoirLayout;
 use crate::shading::shadow_pass::{ShadowEstimates, ShadowPass, Targets};
@@ -292,20 +293,53 @@ impl LghFrame {
         memory: &mut FrameMemory,
         atrous: Option<AtrousBackend>,
     ) -> MethodOutput {
-        let Self {
-            mut stats,
-            timings: mut t,
-            lighting_ms,
-            n,
-            ..
-        } = self;
-        let (world, g, all) = (inputs.world, inputs.gbuffer, inputs.settings);
+        let filter = self.ratio_filter(inputs);
         let LoopResult {
             a,
             overdraw,
             estimates,
             timings,
         } = shaded;
+        let mut t = timings;
+        let (world, g) = (inputs.world, inputs.gbuffer);
+        let shadowed =
+            shadowed_indirect_with(world, g, a, estimates, &filter, &mut t, memory, atrous);
+        self.finish_shadowed(inputs, shadowed, overdraw, t)
+    }
+
+    /// The ratio estimator's settings for this frame: the blur of its interleaving, the
+    /// a-trous passes, and the largest ratio (lgh's unbiased estimate corrects A, so its
+    /// ratio may exceed 1).
+    #[must_use]
+    pub fn ratio_filter(&self, inputs: &MethodInputs) -> RatioFilter {
+        let all = inputs.settings;
+        RatioFilter {
+            max_ratio: if all.lgh.estimator == Estimator::Unbiased {
+                RATIO_CORRECTION
+            } else {
+                RATIO_VISIBILITY
+            },
+            ..all.ratio_filter(self.n)
+        }
+    }
+
+    /// The frame's output from the ratio estimator's result `shadowed` (computed elsewhere,
+    /// e.g. on the GPU, with [`LghFrame::ratio_filter`]), the lights per pixel and the times
+    /// of the steps after the preparation (`lighting` gets the preparation's share added).
+    #[must_use]
+    pub fn finish_shadowed(
+        self,
+        inputs: &MethodInputs,
+        shadowed: Shadowed,
+        overdraw: Vec<u32>,
+        timings: Timings,
+    ) -> MethodOutput {
+        let Self {
+            mut stats,
+            timings: mut t,
+            lighting_ms,
+            ..
+        } = self;
         for (name, ms) in timings.0 {
             let ms = if name == "lighting" {
                 ms + lighting_ms
@@ -314,17 +348,7 @@ impl LghFrame {
             };
             t.push(&name, ms);
         }
-        stats.avg_overdraw = g.mean_over_hits(&overdraw);
-        let filter = RatioFilter {
-            max_ratio: if all.lgh.estimator == Estimator::Unbiased {
-                RATIO_CORRECTION
-            } else {
-                RATIO_VISIBILITY
-            },
-            ..all.ratio_filter(n)
-        };
-        let shadowed =
-            shadowed_indirect_with(world, g, a, estimates, &filter, &mut t, memory, atrous);
+        stats.avg_overdraw = inputs.gbuffer.mean_over_hits(&overdraw);
         stats.shadow_rays = shadowed.rays;
         MethodOutput {
             radiance: shadowed.indirect,

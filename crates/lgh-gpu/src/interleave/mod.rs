@@ -1,0 +1,156 @@
+//! The interleaving blur on the GPU (`shaders/discontinuities.wgsl`, `shaders/blur.wgsl`):
+//! lgh-render's `shading::interleave::{discontinuities, blur_n}` (LGH 2019 section 4.3;
+//! docs/design.md, "Interleaved sampling"), recorded into a frame's batch so that the
+//! lighting loop's images stay on the GPU from the loop to the ratio estimator's filter.
+
+use lgh_render::shading::interleave::BlurParams;
+
+use crate::batch::Batch;
+use crate::context::{GpuContext, GpuError};
+use crate::gbuffer::GpuGBuffer;
+use crate::pool::Lease;
+
+/// The widest blur the kernel takes (its weights fill five vec4s).
+pub const MAX_RADIUS: u32 = 19;
+
+/// `Params` of `discontinuities.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct JumpParams {
+    width: u32,
+    height: u32,
+    z_diff: f32,
+    n_diff: f32,
+}
+
+/// `Params` of `blur.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct BlurUniform {
+    width: u32,
+    height: u32,
+    vertical: u32,
+    radius: u32,
+    phases: u32,
+    planes: u32,
+    plane_first: u32,
+    plane_count: u32,
+    weights: [f32; 20],
+}
+
+/// The WGSL source of the blur kernel.
+#[must_use]
+pub fn blur_source() -> String {
+    include_str!("../shaders/blur.wgsl").to_owned()
+}
+
+/// The WGSL source of the discontinuity kernel.
+#[must_use]
+pub fn discontinuities_source() -> String {
+    include_str!("../shaders/discontinuities.wgsl").to_owned()
+}
+
+/// True if the GPU blur takes `p` (its radius at most [`MAX_RADIUS`]).
+#[must_use]
+pub fn supported(p: &BlurParams) -> bool {
+    p.radius <= MAX_RADIUS
+}
+
+/// Images blurred in place: `planes` vec4s per pixel, of which `first..first + count` are
+/// blurred with `params`.
+pub(crate) struct Planes {
+    pub first: u32,
+    pub count: u32,
+    pub params: BlurParams,
+}
+
+/// Records the blur of `images` (`planes` vec4s per pixel, in place through `scratch` of the
+/// same size) into `batch`: the discontinuities of `p` (the z and normal thresholds of the
+/// first group) once into `jumps`, then per group the pass along x and the pass along y.
+///
+/// # Errors
+/// A radius above [`MAX_RADIUS`], or the image exceeds one dispatch.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn record(
+    ctx: &GpuContext,
+    batch: &mut Batch<'_>,
+    g: (&GpuGBuffer, u32, u32),
+    images: &Lease<'_>,
+    scratch: &Lease<'_>,
+    jumps: &Lease<'_>,
+    planes: u32,
+    groups: &[Planes],
+) -> Result<(), GpuError> {
+    let (gbuffer, width, height) = g;
+    let n = (width * height) as usize;
+    let Some(first) = groups.first() else {
+        return Ok(());
+    };
+    let pipeline = ctx.pipeline("discontinuities", discontinuities_source);
+    let uniform = ctx.uniform(
+        "discontinuities",
+        &JumpParams {
+            width,
+            height,
+            z_diff: first.params.z_diff,
+            n_diff: first.params.n_diff,
+        },
+    );
+    let bind = ctx.bind_group(
+        &pipeline,
+        vec![
+            uniform.as_entire_binding(),
+            gbuffer.binding(),
+            jumps.binding(),
+        ],
+    );
+    batch.dispatch("interleave_blur", &pipeline, &bind, n)?;
+    let pipeline = ctx.pipeline("blur", blur_source);
+    for vertical in [0, 1] {
+        let (from, to) = if vertical == 0 {
+            (images, scratch)
+        } else {
+            (scratch, images)
+        };
+        for group in groups {
+            let p = &group.params;
+            if !supported(p) {
+                return Err(GpuError::TooLarge(format!(
+                    "a blur radius of {} (the GPU's blur takes {MAX_RADIUS})",
+                    p.radius
+                )));
+            }
+            // lgh-render's weights, computed alike.
+            let mut weights = [0.0f32; 20];
+            for (k, w) in weights.iter_mut().enumerate().take(p.radius as usize + 1) {
+                *w = (-((k * k) as f32) / (2.0 * p.sigma * p.sigma)).exp();
+            }
+            let uniform = ctx.uniform(
+                "blur",
+                &BlurUniform {
+                    width,
+                    height,
+                    vertical,
+                    radius: p.radius,
+                    phases: p.phases,
+                    planes,
+                    plane_first: group.first,
+                    plane_count: group.count,
+                    weights,
+                },
+            );
+            let bind = ctx.bind_group(
+                &pipeline,
+                vec![
+                    uniform.as_entire_binding(),
+                    gbuffer.binding(),
+                    jumps.binding(),
+                    from.binding(),
+                    to.binding(),
+                ],
+            );
+            batch.dispatch("interleave_blur", &pipeline, &bind, n)?;
+        }
+    }
+    Ok(())
+}

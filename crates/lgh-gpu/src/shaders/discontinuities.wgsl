@@ -1,0 +1,88 @@
+// The jumps the interleaving blur stops at (lgh-render's shading/interleave, discontinuities):
+// per pixel, bit 1 if it jumps to its neighbour at (1, 0), bit 2 to the one at (0, 1): exactly
+// one of the two sees a surface, or the depth differs by more than z_diff times the local
+// depth slope (the larger over the axes of the smaller one-sided difference to a neighbour
+// that sees a surface), or the normals by more than n_diff in 1 - n . n'.
+
+struct Params {
+    width: u32,
+    height: u32,
+    z_diff: f32,
+    n_diff: f32,
+}
+
+// position (w: 1 where the pixel sees a surface), normal, geometric normal, albedo (w: the
+// linear depth).
+struct Pixel {
+    position: vec4<f32>,
+    normal: vec4<f32>,
+    geo_normal: vec4<f32>,
+    albedo: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> gbuffer: array<Pixel>;
+@group(0) @binding(2) var<storage, read_write> jumps: array<u32>;
+
+const BIG: f32 = 3.0e38;
+
+fn hit(i: u32) -> bool {
+    return gbuffer[i].position.w != 0.0;
+}
+
+fn depth(i: u32) -> f32 {
+    return gbuffer[i].albedo.w;
+}
+
+// The smaller |depth difference| to the neighbours a and b that exist (ok) and see a
+// surface; BIG if none.
+fn slope(i: u32, a: u32, a_ok: bool, b: u32, b_ok: bool) -> f32 {
+    var s = BIG;
+    if (a_ok && hit(a)) {
+        s = min(s, abs(depth(a) - depth(i)));
+    }
+    if (b_ok && hit(b)) {
+        s = min(s, abs(depth(b) - depth(i)));
+    }
+    return s;
+}
+
+fn jump(i: u32, j: u32, scale: f32) -> bool {
+    let hi = hit(i);
+    if (hi != hit(j)) {
+        return true;
+    }
+    if (!hi) {
+        return false;
+    }
+    let dz = abs(depth(j) - depth(i)) / scale;
+    let dn = 1.0 - dot(gbuffer[i].normal.xyz, gbuffer[j].normal.xyz);
+    return dz > params.z_diff || dn > params.n_diff;
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    let w = params.width;
+    if (i >= w * params.height) {
+        return;
+    }
+    let x = i % w;
+    let y = i / w;
+    var scale = 1.0;
+    if (hit(i)) {
+        let gx = slope(i, i - 1u, x > 0u, i + 1u, x + 1u < w);
+        let gy = slope(i, i - w, y > 0u, i + w, y + 1u < params.height);
+        let fx = select(0.0, gx, gx < BIG);
+        let fy = select(0.0, gy, gy < BIG);
+        scale = max(max(fx, fy), 1e-4);
+    }
+    var flags = 0u;
+    if (x + 1u < w && jump(i, i + 1u, scale)) {
+        flags |= 1u;
+    }
+    if (y + 1u < params.height && jump(i, i + w, scale)) {
+        flags |= 2u;
+    }
+    jumps[i] = flags;
+}
