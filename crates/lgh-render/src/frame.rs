@@ -191,9 +191,20 @@ pub fn render_frame_with(
     let mut indirect = std::mem::take(&mut out.radiance);
     if s.edge_samples > 1 {
         t.time("edge_aa", || {
-            let resolve = EdgeResolve::new(world, &camera, &g, s.edge_samples, keep.as_ref());
-            for image in [&mut emission, &mut direct, &mut indirect] {
-                resolve.apply(image);
+            let mut apply = |resolve: &EdgeResolve| {
+                for image in [&mut emission, &mut direct, &mut indirect] {
+                    resolve.apply(image);
+                }
+            };
+            let make = || EdgeResolve::new(world, &camera, &g, s.edge_samples, keep.as_ref());
+            match keep {
+                // A piece of a frame resolves its own rectangle.
+                Some(_) => apply(&make()),
+                None => apply(memory.edge_resolve.get_or_insert_with(
+                    &g,
+                    [s.edge_samples, 0, 0, 0],
+                    make,
+                )),
             }
         });
     }

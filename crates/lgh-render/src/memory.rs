@@ -4,6 +4,7 @@ use lgh_core::lighting_grid::GridBuilder;
 use lgh_scene::camera::CameraFrame;
 
 use crate::denoise::atrous::AtrousBuffers;
+use crate::passes::edge_aa::EdgeResolve;
 use crate::passes::gbuffer::GBuffer;
 use crate::shading::tiles::AllBounds;
 
@@ -30,6 +31,9 @@ pub struct FrameMemory {
     pub tile_bounds: ViewCache<AllBounds>,
     /// The interleave blur's discontinuities, while the G-buffer shows the same view.
     pub discontinuities: ViewCache<Vec<u8>>,
+    /// The edge resolve's sub-pixel samples (its primary rays), while the G-buffer shows
+    /// the same view: a viewer whose camera stands still traces them once.
+    pub edge_resolve: ViewCache<EdgeResolve>,
 }
 
 /// A value derived from the G-buffer alone (the binning's tile bounds, the blur's
