@@ -23,6 +23,9 @@ pub struct Batch<'c> {
     names: Vec<&'static str>,
     /// The read-backs: (staging buffer, bytes).
     reads: Vec<Lease<'c>>,
+    /// Leased buffers the recorded work uses, kept out of the pool until the work is done
+    /// ([`Batch::keep`]).
+    kept: Vec<Lease<'c>>,
 }
 
 impl<'c> Batch<'c> {
@@ -46,6 +49,7 @@ impl<'c> Batch<'c> {
             queries,
             names: Vec::new(),
             reads: Vec::new(),
+            kept: Vec::new(),
         }
     }
 
@@ -88,6 +92,14 @@ impl<'c> Batch<'c> {
         pass.set_bind_group(0, bind, &[]);
         pass.dispatch_workgroups(groups, 1, 1);
         Ok(())
+    }
+
+    /// Keeps `lease` (a buffer the recorded work reads or writes) until the batch is done. A
+    /// lease dropped before then goes back to the pool, where another frame (another
+    /// thread's) could lease it and write into it before this batch's work runs: every
+    /// lease the batch uses must outlive it, held by the caller or kept here.
+    pub fn keep(&mut self, lease: Lease<'c>) {
+        self.kept.push(lease);
     }
 
     /// Records the zeroing of `buffer`.

@@ -1,14 +1,17 @@
 //! The frame's G-buffer on the GPU, shared by the frame's passes (direct light, the lighting
 //! loop, the filters) and kept from frame to frame while it does not change: the viewer's
 //! G-buffer stands still with its camera, and uploading its 59 MB (1280x720) took longer
-//! than the passes that read it on an H200 (docs/performance.md). The cache compares the
-//! frame's planes with a copy of the last uploaded ones, byte for byte (in parallel), so a
-//! changed G-buffer is never mistaken for the last.
+//! than the passes that read it on an H200 (docs/performance.md). A G-buffer whose view is
+//! known ([`GBuffer::view`]: the world's geometry and the camera it was traced for, which
+//! code that changes the planes sets to `None`) is the last one if its view is; one whose
+//! view is unknown is compared with a copy of the last uploaded planes, byte for byte (in
+//! parallel), so a changed G-buffer is never mistaken for the last.
 
 use std::sync::{Arc, Mutex, PoisonError};
 
 use glam::Vec3;
 use lgh_render::passes::gbuffer::GBuffer;
+use lgh_scene::camera::CameraFrame;
 use rayon::prelude::*;
 
 use crate::context::{GpuContext, GpuError};
@@ -45,6 +48,8 @@ pub struct GpuGBuffer {
     /// The planes it was packed from: width, height, and position, normal, geometric normal,
     /// albedo and depth as bytes.
     planes: (u32, u32, [Vec<u8>; 5]),
+    /// The view of the G-buffer it was packed from.
+    view: Option<(u64, CameraFrame)>,
 }
 
 impl GpuGBuffer {
@@ -60,9 +65,13 @@ impl GpuGBuffer {
         &self.buffer
     }
 
-    /// True if it was packed from exactly the planes of `g`.
+    /// True if it was packed from exactly the planes of `g`: the same known view, or the
+    /// same bytes.
     fn holds(&self, g: &GBuffer) -> bool {
         let (w, h, planes) = &self.planes;
+        if g.view.is_some() && g.view == self.view && (*w, *h) == (g.width, g.height) {
+            return true;
+        }
         *w == g.width
             && *h == g.height
             && plane_bytes(g)
@@ -134,6 +143,7 @@ impl GpuContext {
         let up = Arc::new(GpuGBuffer {
             buffer,
             planes: (w, h, planes),
+            view: g.view,
         });
         *cache.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::clone(&up));
         Ok(up)

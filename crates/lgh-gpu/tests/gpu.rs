@@ -326,9 +326,11 @@ fn frames_map_to_gpu_methods_where_the_gpu_runs_their_settings() {
     assert_eq!(lgh_gpu::gpu_method_for(&s), Some(lgh_gpu::brute::BRUTE_GPU));
 }
 
-/// The context's G-buffer cache: the same planes give the uploaded buffer again; a G-buffer
-/// differing in one pixel's albedo, or in size, gives a new upload. And an upload larger
-/// than one parallel piece, not a whole number of them, reads back as it went up.
+/// The context's G-buffer cache: a G-buffer of the same view, or of an unknown view with
+/// the same planes, gives the uploaded buffer again; one of an unknown view differing in
+/// one pixel's albedo (code that changes the planes forgets the view), or of another size,
+/// gives a new upload. And an upload larger than one parallel piece, not a whole number of
+/// them, reads back as it went up.
 #[test]
 #[cfg_attr(
     not(gpu_adapter),
@@ -340,10 +342,15 @@ fn uploads_arrive_whole_and_the_gbuffer_is_reused_only_while_unchanged() {
     let w = world(None);
     let camera = w.scene.camera().frame(40, 30);
     let g = lgh_render::passes::gbuffer::GBuffer::render(&w, &camera, 40, 30);
+    assert!(g.view.is_some());
     let a = ctx.gbuffer(&g).expect("upload");
     let b = ctx.gbuffer(&g.clone()).expect("upload");
+    assert!(std::sync::Arc::ptr_eq(&a, &b), "same view, same buffer");
+    let mut unknown = g.clone();
+    unknown.view = None;
+    let b = ctx.gbuffer(&unknown).expect("upload");
     assert!(std::sync::Arc::ptr_eq(&a, &b), "same planes, same buffer");
-    let mut changed = g.clone();
+    let mut changed = unknown.clone();
     changed.albedo[517].x += 0.25;
     let c = ctx.gbuffer(&changed).expect("upload");
     assert!(

@@ -161,7 +161,6 @@ pub(super) struct Loop<'c> {
     /// When the frame's GPU work began, and the milliseconds spent packing and uploading.
     pub start: Instant,
     pub upload_ms: f64,
-    _tables: Vec<Lease<'c>>,
 }
 
 /// Packs and uploads the loop's inputs `tables` and records the loop (timed "lighting").
@@ -198,19 +197,22 @@ pub(super) fn record_loop<'c>(
     let bind = ctx.bind_group(&pipeline, resources);
     let mut batch = Batch::new(ctx);
     batch.dispatch("lighting", &pipeline, &bind, n)?;
+    for lease in buffers {
+        batch.keep(lease);
+    }
     Ok(Loop {
         batch,
         out,
         gbuffer,
         start,
         upload_ms: start.elapsed().as_secs_f64() * 1e3,
-        _tables: buffers,
     })
 }
 
 /// The GPU's pass times as the frame's timings, with "gpu_transfer" the rest of the wall
-/// time since `start` less `cpu_ms` (CPU work timed apart); without timestamps, "lighting"
-/// stands for all of the GPU's work.
+/// time since `start` less `cpu_ms` (CPU work timed apart) and "gpu_upload" its part before
+/// the submission (`upload_ms`: packing and writing the tables); without timestamps,
+/// "lighting" stands for all of the GPU's work.
 pub(super) fn gpu_timings(gpu: &PassTimes, start: Instant, upload_ms: f64, cpu_ms: f64) -> Timings {
     let mut t = Timings::default();
     let wall = start.elapsed().as_secs_f64() * 1e3 - cpu_ms;
@@ -228,6 +230,8 @@ pub(super) fn gpu_timings(gpu: &PassTimes, start: Instant, upload_ms: f64, cpu_m
     }
     let gpu_ms: f64 = gpu.iter().map(|(_, ms)| ms).sum();
     t.push("gpu_transfer", (wall - gpu_ms).max(0.0));
+    // Of which the packing and upload of the tables before the submission.
+    t.push("gpu_upload", upload_ms);
     t
 }
 

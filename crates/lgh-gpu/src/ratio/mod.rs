@@ -130,6 +130,8 @@ pub(crate) fn record<'c>(
         }
         let size = (frame.gbuffer, g.width, g.height);
         interleave::record(ctx, batch, size, asu, &scratch, &jumps, 3, &groups)?;
+        batch.keep(scratch);
+        batch.keep(jumps);
     }
     if k == 0 {
         return Ok(None);
@@ -165,6 +167,9 @@ pub(crate) fn record<'c>(
         0
     };
     ratio.record(ctx, batch, 1, &pair[last])?;
+    for lease in pair {
+        batch.keep(lease);
+    }
     Ok(Some(result))
 }
 
