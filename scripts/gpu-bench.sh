@@ -76,11 +76,21 @@ done
 # The paper's tables with the loop on the GPU (its JSON names the adapter).
 step tables sh -c "\"$lgh\" bench render --device gpu --size $size --vpls ${vpls// /,} \
     --runs 3 --interleave 1,4 --json >\"$tmp/tables.json\""
+# The same on Sponza with 4 x 4 interleaving: the loop's cost without shadows, with 1 and
+# with 4 shadow samples.
+sponza_tables=null
+if [[ " ${names[*]} " == *" sponza "* ]]; then
+    step tables-sponza sh -c "\"$lgh\" bench render scenes/sponza.toml --device gpu \
+        --size $size --vpls ${vpls// /,} --runs 2 --interleave 4 --json \
+        >\"$tmp/tables-sponza.json\""
+    sponza_tables=$(cat "$tmp/tables-sponza.json")
+fi
 
 {
     echo "{"
     echo "  \"size\": \"$size\","
     echo "  \"tables\": $(cat "$tmp/tables.json"),"
+    echo "  \"tables_sponza\": $sponza_tables,"
     echo "  \"cases\": ["
     for j in "${!cases[@]}"; do
         sep=","
