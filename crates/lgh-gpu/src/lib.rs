@@ -33,6 +33,17 @@ pub use context::{GpuContext, GpuError};
 pub use pool::Lease;
 pub use scene::GpuScene;
 
+/// A kernel's WGSL: the shared declarations (`shaders/common.wgsl`: the G-buffer's `Pixel`,
+/// `luminance`, `hash`, `PI`) followed by `parts` (the kernel, and `shaders/bvh.wgsl` for the
+/// kernels that trace rays).
+pub(crate) fn kernel(parts: &[&str]) -> String {
+    let mut source = include_str!("shaders/common.wgsl").to_owned();
+    for part in parts {
+        source.push_str(part);
+    }
+    source
+}
+
 /// The GPU method for a frame of `settings`: [`gpu_method`] of its method, or `None` where
 /// that method's GPU version does not run these settings (lgh with a shadow estimate other
 /// than the default, [`lgh::supported`]), so that a caller that falls back to the CPU (the

@@ -30,7 +30,7 @@ struct Params {
 /// The WGSL source of the kernel.
 #[must_use]
 pub fn source() -> String {
-    include_str!("../shaders/atrous.wgsl").to_owned()
+    crate::kernel(&[include_str!("../shaders/atrous.wgsl")])
 }
 
 /// The G-buffer as the filter reads it: per pixel `stride` vec4s, the position (w: 1 where

@@ -100,11 +100,10 @@ impl IndirectMethod for GpuBrute {
 /// The WGSL source of the kernel (with the BVH traversal).
 #[must_use]
 pub fn source() -> String {
-    [
+    crate::kernel(&[
         include_str!("../shaders/brute.wgsl"),
         include_str!("../shaders/bvh.wgsl"),
-    ]
-    .concat()
+    ])
 }
 
 /// Irradiance sums E (the sum of every VPL's unshadowed or shadowed irradiance) per pixel.

@@ -63,17 +63,16 @@ struct CompositeParams {
 /// The WGSL source of the sampling kernel (with the BVH traversal).
 #[must_use]
 pub fn source() -> String {
-    [
+    crate::kernel(&[
         include_str!("../shaders/direct.wgsl"),
         include_str!("../shaders/bvh.wgsl"),
-    ]
-    .concat()
+    ])
 }
 
 /// The WGSL source of the composite kernel.
 #[must_use]
 pub fn composite_source() -> String {
-    include_str!("../shaders/direct_composite.wgsl").to_owned()
+    crate::kernel(&[include_str!("../shaders/direct_composite.wgsl")])
 }
 
 /// The lights' tables of `direct.wgsl` (32-bit words, four a row) and where each starts.

@@ -41,13 +41,13 @@ struct BlurUniform {
 /// The WGSL source of the blur kernel.
 #[must_use]
 pub fn blur_source() -> String {
-    include_str!("../shaders/blur.wgsl").to_owned()
+    crate::kernel(&[include_str!("../shaders/blur.wgsl")])
 }
 
 /// The WGSL source of the discontinuity kernel.
 #[must_use]
 pub fn discontinuities_source() -> String {
-    include_str!("../shaders/discontinuities.wgsl").to_owned()
+    crate::kernel(&[include_str!("../shaders/discontinuities.wgsl")])
 }
 
 /// True if the GPU blur takes `p` (its radius at most [`MAX_RADIUS`]).

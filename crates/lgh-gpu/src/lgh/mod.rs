@@ -145,11 +145,10 @@ pub fn supported(s: &LghSettings) -> Result<(), RenderError> {
 /// The WGSL source of the kernel (with the BVH traversal).
 #[must_use]
 pub fn source() -> String {
-    [
+    crate::kernel(&[
         include_str!("../shaders/lgh.wgsl"),
         include_str!("../shaders/bvh.wgsl"),
-    ]
-    .concat()
+    ])
 }
 
 /// The lighting loop recorded into a batch, with the buffers it reads and writes.

@@ -36,7 +36,7 @@ struct RatioParams {
 /// The WGSL source of the ratio kernel.
 #[must_use]
 pub fn ratio_source() -> String {
-    include_str!("../shaders/ratio.wgsl").to_owned()
+    crate::kernel(&[include_str!("../shaders/ratio.wgsl")])
 }
 
 /// One pass of `ratio.wgsl` over the loop's images `asu`.

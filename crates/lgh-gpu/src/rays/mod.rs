@@ -24,11 +24,10 @@ pub struct PointPair {
 /// The WGSL source of the kernel (with the BVH traversal).
 #[must_use]
 pub fn source() -> String {
-    [
+    crate::kernel(&[
         include_str!("../shaders/occlusion.wgsl"),
         include_str!("../shaders/bvh.wgsl"),
-    ]
-    .concat()
+    ])
 }
 
 /// For each pair, whether anything of `scene` lies between its points, both moved off their

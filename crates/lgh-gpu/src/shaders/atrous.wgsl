@@ -27,10 +27,6 @@ struct Params {
 
 const NEGLIGIBLE: f32 = 40.0;
 
-fn luminance(c: vec3<f32>) -> f32 {
-    return dot(c, vec3<f32>(0.299, 0.587, 0.114));
-}
-
 // lum(S) / lum(U) clamped to [0, 1]; 1 where U has no luminance.
 fn ratio(s: vec3<f32>, u: vec3<f32>) -> f32 {
     let lu = luminance(u);

@@ -24,13 +24,6 @@ struct Params {
     weights: array<vec4<f32>, 5>,
 }
 
-struct Pixel {
-    position: vec4<f32>,
-    normal: vec4<f32>,
-    geo_normal: vec4<f32>,
-    albedo: vec4<f32>,
-}
-
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> gbuffer: array<Pixel>;
 @group(0) @binding(2) var<storage, read> jumps: array<u32>;

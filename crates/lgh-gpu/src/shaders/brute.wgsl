@@ -15,15 +15,6 @@ struct Params {
     _pad1: u32,
 }
 
-// A G-buffer pixel: position (w = 1 if the pixel sees a surface), shading normal, geometric
-// normal, albedo.
-struct Pixel {
-    position: vec4<f32>,
-    normal: vec4<f32>,
-    geo_normal: vec4<f32>,
-    albedo: vec4<f32>,
-}
-
 struct Vpl {
     position: vec4<f32>,
     normal: vec4<f32>,
@@ -36,8 +27,6 @@ struct Vpl {
 @group(0) @binding(3) var<storage, read> gbuffer: array<Pixel>;
 @group(0) @binding(4) var<storage, read> vpls: array<Vpl>;
 @group(0) @binding(5) var<storage, read_write> irradiance: array<vec4<f32>>;
-
-const PI: f32 = 3.14159265358979;
 
 // lgh_core::vpl::light_irradiance of a VPL (no isotropic part).
 fn vpl_irradiance(x: vec3<f32>, n_x: vec3<f32>, p: vec3<f32>, n_v: vec3<f32>, flux: vec3<f32>) -> vec3<f32> {

@@ -7,8 +7,6 @@
 // per pixel the shadowed rest and the analytic irradiance (`lit`), and S (w: the filter's
 // guide) and U (`su`) for the a-trous filter; direct_composite.wgsl finishes.
 
-const PI: f32 = 3.14159265358979;
-
 struct Params {
     pixels: u32,
     samples: u32,
@@ -28,13 +26,6 @@ struct Params {
     far: f32,
     _p1: f32,
     _p2: f32,
-}
-
-struct Pixel {
-    position: vec4<f32>,
-    normal: vec4<f32>,
-    geo_normal: vec4<f32>,
-    albedo: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -59,16 +50,6 @@ fn f4(i: u32) -> vec4<f32> {
 
 fn word(base: u32, k: u32) -> u32 {
     return lights[base + k / 4u][k % 4u];
-}
-
-fn hash(v: u32) -> u32 {
-    let s = v * 747796405u + 2891336453u;
-    let w = ((s >> ((s >> 28u) + 4u)) ^ s) * 277803737u;
-    return (w >> 22u) ^ w;
-}
-
-fn luminance(c: vec3<f32>) -> f32 {
-    return dot(c, vec3<f32>(0.299, 0.587, 0.114));
 }
 
 // A 32-bit fixed-point number in [0, 1) as an f32 (its top 24 bits).

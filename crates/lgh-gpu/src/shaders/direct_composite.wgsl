@@ -3,21 +3,12 @@
 // D(U) is zero; the analytic term only where the frame has analytic emitters) and the
 // radiance albedo / pi x E.
 
-const PI: f32 = 3.14159265358979;
-
 struct Params {
     pixels: u32,
     // 1 if the frame has analytic emitters (else E is the rest alone).
     analytic: u32,
     max_ratio: f32,
     _p0: u32,
-}
-
-struct Pixel {
-    position: vec4<f32>,
-    normal: vec4<f32>,
-    geo_normal: vec4<f32>,
-    albedo: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;

@@ -11,15 +11,6 @@ struct Params {
     n_diff: f32,
 }
 
-// position (w: 1 where the pixel sees a surface), normal, geometric normal, albedo (w: the
-// linear depth).
-struct Pixel {
-    position: vec4<f32>,
-    normal: vec4<f32>,
-    geo_normal: vec4<f32>,
-    albedo: vec4<f32>,
-}
-
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> gbuffer: array<Pixel>;
 @group(0) @binding(2) var<storage, read_write> jumps: array<u32>;

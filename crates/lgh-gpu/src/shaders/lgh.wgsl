@@ -8,7 +8,6 @@
 // The CPU counterpart is lgh-render's methods/lgh (shade.rs, lights.rs); each pixel sums its
 // own terms in a fixed order, so the result does not depend on scheduling.
 
-const PI: f32 = 3.14159265358979;
 const SLOTS: u32 = 16u;
 // An empty representative slot.
 const EMPTY_SLOT: u32 = 0xffffffffu;
@@ -49,13 +48,6 @@ struct Params {
     hier: array<Hier, 8>,
 }
 
-struct Pixel {
-    position: vec4<f32>,
-    normal: vec4<f32>,
-    geo_normal: vec4<f32>,
-    albedo: vec4<f32>,
-}
-
 // A shaded light: position and reach^2; mean normal and isotropic share; intensity (times
 // n^2) and radius r_l; blending floors, level and the x of its vertex (bits of u32s).
 struct Light {
@@ -84,19 +76,9 @@ struct Light {
 
 var<private> rng_state: u32;
 
-fn hash(v: u32) -> u32 {
-    let s = v * 747796405u + 2891336453u;
-    let w = ((s >> ((s >> 28u) + 4u)) ^ s) * 277803737u;
-    return (w >> 22u) ^ w;
-}
-
 fn next_f32() -> f32 {
     rng_state = hash(rng_state);
     return f32(rng_state >> 8u) * (1.0 / 16777216.0);
-}
-
-fn luminance(c: vec3<f32>) -> f32 {
-    return dot(c, vec3<f32>(0.299, 0.587, 0.114));
 }
 
 // B_l(d) for t = d / r_l with the role's floors (lgh_core::blending::LevelRole::floors).

@@ -20,10 +20,6 @@ struct Params {
 // mode 1: per pixel [A, overdraw], [raw ratio, rays], [filtered ratio, 0].
 @group(0) @binding(3) var<storage, read_write> result: array<vec4<f32>>;
 
-fn luminance(c: vec3<f32>) -> f32 {
-    return dot(c, vec3<f32>(0.299, 0.587, 0.114));
-}
-
 fn ratio(s: vec3<f32>, u: vec3<f32>) -> vec3<f32> {
     let r = clamp(s / select(vec3<f32>(1.0), u, u > vec3<f32>(1e-20)), vec3<f32>(0.0), vec3<f32>(params.max_ratio));
     return select(vec3<f32>(1.0), r, u > vec3<f32>(1e-20));

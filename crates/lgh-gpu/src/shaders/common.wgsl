@@ -1,0 +1,24 @@
+// What the kernels share (lgh_gpu::kernel puts it before each kernel's source).
+
+const PI: f32 = 3.14159265358979;
+
+// A G-buffer pixel (lgh_gpu::gbuffer): position (w: 1 where the pixel sees a surface),
+// shading normal, geometric normal, albedo (w: the linear depth where it sees a surface).
+struct Pixel {
+    position: vec4<f32>,
+    normal: vec4<f32>,
+    geo_normal: vec4<f32>,
+    albedo: vec4<f32>,
+}
+
+// lgh_core::color::luminance.
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.299, 0.587, 0.114));
+}
+
+// A PCG-style integer hash: the kernels' own random streams.
+fn hash(v: u32) -> u32 {
+    let s = v * 747796405u + 2891336453u;
+    let w = ((s >> ((s >> 28u) + 4u)) ^ s) * 277803737u;
+    return (w >> 22u) ^ w;
+}
