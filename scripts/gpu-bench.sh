@@ -13,6 +13,8 @@
 # the CPU comparison), STEP_TIMEOUT (seconds per step, 100), LGH_SCENES, LGH_BIN (a built
 # `lgh` to use instead of building one, for machines without cargo).
 # Each step that fails or runs out of time is recorded as {"error": ...} and the rest go on.
+# Each scene also runs its first VPL count with the camera moving (the A and D keys
+# alternating), where the still camera's G-buffer and edge resolve are made every frame.
 # Takes about 2 minutes after the build on a current GPU and 16 cores; lavapipe's times are
 # no measure of a GPU (use SIZE=160x90 VPLS=10000 FRAMES=3 there to check the script).
 set -uo pipefail
@@ -69,8 +71,17 @@ for i in "${!scenes[@]}"; do
                 --stats "$tmp/$name-cpu.json"
             cpu=$(cat "$tmp/$name-cpu.json")
         fi
-        cases+=("{\"scene\": \"${names[$i]}\", \"vpls\": $n, \"view\": $(cat "$tmp/$name-gpu.json"), \"view_cpu\": $cpu}")
+        cases+=("{\"scene\": \"${names[$i]}\", \"vpls\": $n, \"camera\": \"still\", \"view\": $(cat "$tmp/$name-gpu.json"), \"view_cpu\": $cpu}")
     done
+    # A moving camera (the viewer's A and D keys, one a frame, alternating): the G-buffer,
+    # the tile bounds and the edge resolve are made again every frame.
+    n=${vpls%% *}
+    name="${names[$i]}-$n-moving"
+    keys=$(printf 'a,d,%.0s' $(seq "$frames") | cut -d, -f"1-$frames")
+    step "$name-gpu" "$lgh" view "${scenes[$i]}" --headless --size "$size" --vpls "$n" \
+        --shadow-samples 4 --light-speed 2 --keys "$keys" --device gpu --frames "$frames" \
+        --stats "$tmp/$name-gpu.json"
+    cases+=("{\"scene\": \"${names[$i]}\", \"vpls\": $n, \"camera\": \"moving\", \"view\": $(cat "$tmp/$name-gpu.json"), \"view_cpu\": null}")
 done
 
 # The paper's tables with the loop on the GPU (its JSON names the adapter).
