@@ -2,7 +2,8 @@
 //! estimator of lgh-render's `direct::render_direct` (its module docs: punctual lights
 //! exactly, area lights by stratified samples, the analytic emitters through the ratio
 //! estimator of Heitz, Hill & McGuire 2018 with its one a-trous pass), in one submission:
-//! samples, filter ([`crate::atrous::record`], reading the uploaded G-buffer), composite.
+//! samples, filter (the a-trous pass of [`crate::atrous`], reading the uploaded G-buffer),
+//! composite.
 //!
 //! The same estimator with its own random streams: the frame's point set is the CPU's
 //! ([`frame_points`]); each pixel's digital shift is drawn on the GPU. A scene with more
