@@ -102,3 +102,22 @@ impl GpuScene {
         })
     }
 }
+
+impl GpuScene {
+    /// The first four bindings of a kernel that traces rays through the scene from the
+    /// G-buffer's pixels (lgh, brute, direct light): its uniform `params`, the BVH nodes, the
+    /// triangles and the G-buffer; the kernel's own buffers follow.
+    #[must_use]
+    pub fn bindings<'a>(
+        &'a self,
+        params: &'a wgpu::Buffer,
+        gbuffer: &'a crate::gbuffer::GpuGBuffer,
+    ) -> Vec<wgpu::BindingResource<'a>> {
+        vec![
+            params.as_entire_binding(),
+            self.nodes.as_entire_binding(),
+            self.tris.as_entire_binding(),
+            gbuffer.binding(),
+        ]
+    }
+}

@@ -233,18 +233,9 @@ pub fn render_direct(
     let mut batch = Batch::new(ctx);
     let params = ctx.uniform("direct params", &tables.params);
     let pipeline = ctx.pipeline("direct", source);
-    let bind = ctx.bind_group(
-        &pipeline,
-        vec![
-            params.as_entire_binding(),
-            scene.nodes.as_entire_binding(),
-            scene.tris.as_entire_binding(),
-            gbuf.binding(),
-            table.binding(),
-            lit.binding(),
-            pair[0].binding(),
-        ],
-    );
+    let mut resources = scene.bindings(&params, &gbuf);
+    resources.extend([table.binding(), lit.binding(), pair[0].binding()]);
+    let bind = ctx.bind_group(&pipeline, resources);
     batch.dispatch("direct_samples", &pipeline, &bind, n)?;
     let any_analytic = tables.params.analytic > 0;
     let last = if any_analytic {

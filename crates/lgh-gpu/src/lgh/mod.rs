@@ -185,12 +185,7 @@ pub(super) fn record_loop<'c>(
     // Every pixel's three words are written by the kernel: no clearing.
     let out = ctx.output("A, S, U", 48 * n as u64)?;
     let pipeline = ctx.pipeline("lgh", source);
-    let mut resources = vec![
-        params.as_entire_binding(),
-        scene.nodes.as_entire_binding(),
-        scene.tris.as_entire_binding(),
-        gbuffer.binding(),
-    ];
+    let mut resources = scene.bindings(&params, &gbuffer);
     resources.extend(buffers.iter().map(Lease::binding));
     resources.push(out.binding());
     let bind = ctx.bind_group(&pipeline, resources);
