@@ -1,14 +1,17 @@
 //! The GPU backend of lgh: the frame's passes as wgpu compute shaders (WGSL), on any adapter
 //! wgpu finds (Vulkan, Metal, DX12; Mesa's lavapipe on a machine without a GPU).
 //!
-//! This is the first milestone of the backend (issue 35): a [`GpuContext`] (adapter, device,
-//! queue), the scene uploaded with a BVH built on the CPU ([`GpuScene`]: obvhs's binary BVH,
-//! flattened, traversed in compute: no ray-tracing hardware is needed), and the brute-force
-//! reference ([`brute::BRUTE_GPU`], [`brute::BRUTE_UNSHADOWED_GPU`]), which checks the GPU's
-//! rays and shading against the CPU's, and `lgh` with its lighting loop, shadow-sample
-//! selection, unbiased shadow targets and shadow rays on the GPU ([`lgh::LGH_GPU`]). The
-//! other passes of the LGH frame (G-buffer, VPLs, hierarchy build, tile binning, filters)
-//! run on the CPU.
+//! What runs here (issue 35): a [`GpuContext`] (adapter, device, queue, buffers leased
+//! between frames, the frame's G-buffer kept while it stands still) and [`Batch`] (a frame's
+//! passes in one submission, timed); the scene uploaded with a BVH built on the CPU
+//! ([`GpuScene`]: obvhs's binary BVH, flattened, traversed in compute: no ray-tracing
+//! hardware is needed); the brute-force reference ([`brute::BRUTE_GPU`],
+//! [`brute::BRUTE_UNSHADOWED_GPU`]), which checks the GPU's rays and shading against the
+//! CPU's; `lgh` with its lighting loop, shadow-sample selection, unbiased shadow targets and
+//! shadow rays ([`lgh::LGH_GPU`]) followed by the interleaving blur ([`interleave`]) and the
+//! ratio estimator ([`ratio`], [`atrous`]); and the direct light of both ([`direct`]). The
+//! G-buffer, the VPLs, the hierarchy build, its representatives and the tile binning run on
+//! the CPU.
 //!
 //! The GPU methods are [`lgh_render::Method`]s like the CPU's: `render_frame` runs them with
 //! the same settings and gives the same `Frame`. Results are deterministic: every pixel sums

@@ -4,12 +4,14 @@
 //! light, a representative VPL by contribution) and one shadow ray each through the uploaded
 //! BVH, giving S and U.
 //!
-//! This milestone runs the steps around the loop on the CPU, as the CPU method does
-//! ([`LghFrame::prepare`]: VPLs, hierarchies, tile binning; [`LghFrame::finish`]: the
-//! interleaving blur, the ratio estimator and its a-trous filter) and uploads the loop's
-//! inputs as flat tables ([`LghFrame::tables`]). It runs lgh's default estimate (unbiased,
-//! representative targets drawn at the ray, stratified selection); other settings are
-//! refused with a clear error.
+//! The steps before the loop run on the CPU, as the CPU method runs them
+//! ([`LghFrame::prepare`]: hierarchies, representatives, tile binning), and the loop's inputs
+//! go up as flat tables ([`LghFrame::tables`]); the steps after it (the interleaving blur,
+//! the ratio estimator with its a-trous filter) run on the GPU in the loop's submission
+//! ([`crate::ratio`]), and the CPU composites ([`LghFrame::finish_shadowed`]). A blur wider
+//! than the GPU's takes the CPU's (the loop's images read back, [`LghFrame::finish_with`]).
+//! It runs lgh's default estimate (unbiased, representative targets drawn at the ray,
+//! stratified selection); other settings are refused with a clear error.
 
 use std::sync::Arc;
 use std::time::Instant;
