@@ -27,15 +27,6 @@ struct Params {
 
 const NEGLIGIBLE: f32 = 40.0;
 
-// lum(S) / lum(U) clamped to [0, 1]; 1 where U has no luminance.
-fn ratio(s: vec3<f32>, u: vec3<f32>) -> f32 {
-    let lu = luminance(u);
-    if (lu > 1e-12) {
-        return clamp(luminance(s) / lu, 0.0, 1.0);
-    }
-    return 1.0;
-}
-
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let p = id.x;
@@ -88,6 +79,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     s = s / total;
     u = u / total;
-    dst[2u * p] = vec4<f32>(s, ratio(s, u));
+    dst[2u * p] = vec4<f32>(s, filter_guide(s, u));
     dst[2u * p + 1u] = vec4<f32>(u, 0.0);
 }

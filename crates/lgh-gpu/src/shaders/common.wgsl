@@ -22,3 +22,13 @@ fn hash(v: u32) -> u32 {
     let w = ((s >> ((s >> 28u) + 4u)) ^ s) * 277803737u;
     return (w >> 22u) ^ w;
 }
+
+// The a-trous filter's guide (lgh-render's denoise::atrous::filter_guide): lum(S) / lum(U)
+// clamped to [0, 1]; 1 where U has no luminance.
+fn filter_guide(s: vec3<f32>, u: vec3<f32>) -> f32 {
+    let lu = luminance(u);
+    if (lu > 1e-12) {
+        return clamp(luminance(s) / lu, 0.0, 1.0);
+    }
+    return 1.0;
+}

@@ -247,10 +247,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let psa = projected_solid_angle(p, n, v0, v0 + f4(e + 1u).xyz, v0 + f4(e + 2u).xyz);
         analytic += f4(e + 4u).xyz * psa;
     }
-    let lu = luminance(u);
-    let guide = select(1.0, clamp(luminance(s) / lu, 0.0, 1.0), lu > 1e-12);
     lit[2u * i] = vec4<f32>(base, 0.0);
     lit[2u * i + 1u] = vec4<f32>(analytic, 0.0);
-    su[2u * i] = vec4<f32>(s, guide);
+    su[2u * i] = vec4<f32>(s, filter_guide(s, u));
     su[2u * i + 1u] = vec4<f32>(u, 0.0);
 }

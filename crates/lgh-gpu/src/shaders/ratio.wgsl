@@ -34,9 +34,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let s = asu[3u * i + 1u];
     let u = asu[3u * i + 2u].xyz;
     if (params.mode == 0u) {
-        let lu = luminance(u);
-        let guide = select(1.0, clamp(luminance(s.xyz) / lu, 0.0, 1.0), lu > 1e-12);
-        pair[2u * i] = vec4<f32>(s.xyz, guide);
+        pair[2u * i] = vec4<f32>(s.xyz, filter_guide(s.xyz, u));
         pair[2u * i + 1u] = vec4<f32>(u, 0.0);
         return;
     }
