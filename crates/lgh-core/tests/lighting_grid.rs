@@ -65,7 +65,8 @@ fn sum_d(v: impl Iterator<Item = Vec3>) -> DVec3 {
 
 /// Every level keeps the total intensity (relative 1e-5), its mass-weighted centroid is the
 /// input centroid (the gather levels count each S1 light with its mass), and every grid light
-/// lies within one cell of its vertex.
+/// lies within one cell of its vertex, up to the f32 rounding of its coordinates (a few ulps
+/// of their magnitude: with one light the grid is a tiny box far from the origin).
 fn check_invariants(l: &Lights, g: &LightingGrid) {
     let total = sum_d(l.i.iter().copied());
     let centroid = sum_d(l.p.iter().copied()) / l.p.len() as f64;
@@ -97,8 +98,9 @@ fn check_invariants(l: &Lights, g: &LightingGrid) {
         for k in r {
             let v = g.geometry.vertex_position(level, g.vertex[k]);
             let d = (g.position[k] - v).abs().max_element();
+            let rounding = 4.0 * f32::EPSILON * v.abs().max_element();
             assert!(
-                d <= h * (1.0 + 1e-4),
+                d <= h * (1.0 + 1e-4) + rounding,
                 "level {level}: light {d} from its vertex (h = {h})"
             );
             assert!(g.deviation[k].is_finite() && g.normal[k].length() <= 1.0 + 1e-4);
@@ -248,7 +250,13 @@ fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(48))]
+    // A fixed seed: CI runs the same cases every time (a failure is a regression, not luck);
+    // change the seed locally to explore.
+    #![proptest_config(ProptestConfig {
+        cases: 48,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(2019),
+        ..ProptestConfig::default()
+    })]
     /// The parallel builder equals the plain one-thread reference on random inputs, with 1 and
     /// 2 threads, for all three constructions; and 1 and 2 threads give bit-identical results.
     #[test]
@@ -269,6 +277,17 @@ proptest! {
             assert_same(&one, &reference);
             check_invariants(&l, &one);
         }
+    }
+}
+
+/// One light on a flat box: the grid is a box 0.0025 wide around x = 2.49, so the S1 light's
+/// distance to its vertex is h plus an ulp of the coordinates (CI run of session 11).
+#[test]
+fn one_light_on_a_tiny_grid_keeps_the_invariants() {
+    let l = random_box(1, 868, Vec3::new(4.0, 0.0, 2.0), Vec3::new(-1.0, 2.0, 0.5));
+    for c in ALL {
+        let one = in_pool(1, || build(&l, LevelCount::Fixed(4), c));
+        check_invariants(&l, &one);
     }
 }
 

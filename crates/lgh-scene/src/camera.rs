@@ -197,7 +197,13 @@ mod tests {
     }
 
     proptest::proptest! {
-        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        // A fixed seed: CI runs the same cases every time (a failure is a regression, not luck);
+        // change the seed locally to explore.
+        #![proptest_config(proptest::prelude::ProptestConfig {
+            cases: 256,
+            rng_seed: proptest::test_runner::RngSeed::Fixed(2019),
+            ..proptest::prelude::ProptestConfig::default()
+        })]
         /// The sphere's rectangle holds the projection of every point of the ball (on its
         /// surface and on a sphere inside), and is tight: the points reach within 2% of each
         /// side (balls at least their radius away from the plane of the eye; nearer, the

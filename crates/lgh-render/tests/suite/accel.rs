@@ -49,7 +49,13 @@ fn random_mesh(coords: &[f32]) -> Mesh {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
+    // A fixed seed: CI runs the same cases every time (a failure is a regression, not luck);
+    // change the seed locally to explore.
+    #![proptest_config(ProptestConfig {
+        cases: 64,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(2019),
+        ..ProptestConfig::default()
+    })]
     #[test]
     fn bvh_matches_brute_force(
         coords in prop::collection::vec(-1.0f32..1.0, 9 * 4..9 * 60),
