@@ -71,6 +71,19 @@ impl<'c> Batch<'c> {
             .ok_or_else(|| {
                 GpuError::TooLarge(format!("{invocations} invocations exceed one dispatch"))
             })?;
+        self.dispatch_groups(name, pipeline, bind, groups);
+        Ok(())
+    }
+
+    /// Records a pass of `pipeline` over `groups` workgroups (of the kernel's own size),
+    /// timed under `name`.
+    pub fn dispatch_groups(
+        &mut self,
+        name: &'static str,
+        pipeline: &wgpu::ComputePipeline,
+        bind: &wgpu::BindGroup,
+        groups: u32,
+    ) {
         let slot = self.names.len() as u32;
         let timestamp_writes =
             self.queries
@@ -91,7 +104,6 @@ impl<'c> Batch<'c> {
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, bind, &[]);
         pass.dispatch_workgroups(groups, 1, 1);
-        Ok(())
     }
 
     /// Keeps `lease` (a buffer the recorded work reads or writes) until the batch is done. A
@@ -105,6 +117,12 @@ impl<'c> Batch<'c> {
     /// Records the zeroing of `buffer`.
     pub fn clear(&mut self, buffer: &wgpu::Buffer) {
         self.enc.clear_buffer(buffer, 0, None);
+    }
+
+    /// Records the zeroing of the bytes of `lease` in use.
+    pub fn clear_lease(&mut self, lease: &Lease<'_>) {
+        self.enc
+            .clear_buffer(lease.buffer(), 0, Some(lease.bytes()));
     }
 
     /// Records the copy of the first `bytes` of `from` back to the CPU; [`Batch::finish`]

@@ -57,6 +57,8 @@ pub struct GpuContext {
     pool: BufferPool,
     /// The last uploaded G-buffer ([`GpuContext::gbuffer`]).
     gbuffers: GBufferCache,
+    /// What hierarchy builders keep between frames ([`crate::grid::GpuGridBuilder`]).
+    grids: crate::grid::GridStates,
 }
 
 impl GpuContext {
@@ -96,6 +98,7 @@ impl GpuContext {
             pipelines: Mutex::default(),
             pool: BufferPool::default(),
             gbuffers: GBufferCache::default(),
+            grids: crate::grid::GridStates::default(),
         })
     }
 
@@ -237,6 +240,11 @@ impl GpuContext {
     /// The cache of the last uploaded G-buffer.
     pub(crate) fn gbuffers(&self) -> &GBufferCache {
         &self.gbuffers
+    }
+
+    /// The states of the hierarchy builders not in use.
+    pub(crate) fn grid_states(&self) -> &crate::grid::GridStates {
+        &self.grids
     }
 
     /// The pool of buffers kept between frames.

@@ -20,6 +20,7 @@
 pub mod batch;
 mod context;
 pub mod gbuffer;
+pub mod grid;
 pub mod interleave;
 pub mod pool;
 pub mod scene;
@@ -30,6 +31,7 @@ pub mod direct;
 pub mod lgh;
 pub mod ratio;
 pub mod rays;
+pub mod scan;
 
 pub use batch::Batch;
 pub use context::{GpuContext, GpuError};

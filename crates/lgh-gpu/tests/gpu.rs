@@ -21,7 +21,11 @@ fn every_shader_is_valid_wgsl() {
         lgh_gpu::interleave::blur_source(),
         lgh_gpu::interleave::discontinuities_source(),
         lgh_gpu::ratio::ratio_source(),
-    ] {
+    ]
+    .into_iter()
+    .chain(lgh_gpu::scan::sources())
+    .chain(lgh_gpu::grid::sources().into_iter().map(|(_, s)| s))
+    {
         validate(&source);
     }
 }

@@ -267,13 +267,7 @@ impl GridBuilder {
     ) -> Result<BuildTimings, GridError> {
         let mut t = BuildTimings::default();
         let (lo, hi) = t.time("bounds", || bounds(lights))?;
-        let (lo, hi) = match self.shift {
-            Some(u) => {
-                let d = Vec3::splat(JITTER_SCALE * (hi - lo).max_element());
-                (lo - u * d, hi + (Vec3::ONE - u) * d)
-            }
-            None => (lo, hi),
-        };
+        let (lo, hi) = shifted_bounds(lo, hi, self.shift);
         let src = lights.sources();
         if self.levels.is_empty() {
             self.levels.push(Level::default());
@@ -315,14 +309,12 @@ impl GridBuilder {
         Ok(t)
     }
 
-    /// The paper's rule (section 4.3): the largest l_max with |S_1| < N/2 (at least 1).
-    /// |S_1| grows with l_max, so the search starts from a guess (for lights on surfaces
-    /// |S_1| grows about 4x per level) and counts |S_1| there and at its neighbours without
-    /// building it; the guess and the level above it are counted in one pass
-    /// ([`splat::count_vertices_and_finer`]). Then it builds the S_1 of the level kept (into
-    /// `levels[0]`). When that is the last level sorted (the guess, or a level below it), the
-    /// build reuses the count's sort. The build of the final S_1 is reported as `S1`,
-    /// everything else as `level_count`.
+    /// The paper's rule (section 4.3) by [`level_rule`], counting |S_1| without building it;
+    /// the first count also counts the level above in the same pass
+    /// ([`splat::count_vertices_and_finer`]: the walk usually asks for it next). Then it
+    /// builds the S_1 of the level kept (into `levels[0]`), reusing the last count's sort
+    /// when that count was of the level kept. The build of the final S_1 is reported as
+    /// `S1`, everything else as `level_count`.
     fn auto_levels(
         &mut self,
         lights: &InputLights,
@@ -330,57 +322,36 @@ impl GridBuilder {
         hi: Vec3,
         t: &mut BuildTimings,
     ) -> GridGeometry {
-        let n = lights.positions.len();
         let src = lights.sources();
         let start = Instant::now();
-        let fits = |len: usize| 2 * len < n;
-        let count = |ws: &mut splat::Workspace, l: u32| {
-            splat::count_vertices(ws, &src, &GridGeometry::new(lo, hi, l), 1)
-        };
-        // The S_1 build when it comes right after the count of its level (sort reused).
-        let mut built: Option<(u32, f64)> = None;
-        let chosen = if n < 2 || (hi - lo).max_element() <= 0.0 {
-            1
-        } else {
-            let guess =
-                ((1.0 + (n as f64 / 8.0).max(1.0).log(4.0).floor()) as u32).clamp(1, MAX_LEVELS);
-            let mut l = guess;
-            // The next level is usually too fine: it is counted in the same pass as the
-            // guess, from the guess's sort. If the guess stays the answer, it is built from
-            // the same sort.
-            let counted = (guess > 1).then(|| {
-                let g = GridGeometry::new(lo, hi, guess);
-                splat::count_vertices_and_finer(&mut self.ws, &src, &g, 1)
-            });
-            if counted.is_none_or(|(len, _)| fits(len)) {
-                let mut finer = counted.and_then(|(_, finer)| finer);
-                while l < MAX_LEVELS
-                    && fits(finer.take().unwrap_or_else(|| count(&mut self.ws, l + 1)))
-                {
-                    l += 1;
-                }
-                if l == guess {
-                    built = Some((guess, self.build_counted_s1(&src, lo, hi, guess)));
-                }
+        // The level whose sort the workspace holds, and a count made ahead.
+        let mut sorted: Option<u32> = None;
+        let mut ahead: Option<(u32, usize)> = None;
+        let ws = &mut self.ws;
+        let chosen = level_rule(lights.positions.len(), lo, hi, |l| {
+            if let Some((at, len)) = ahead
+                && at == l
+            {
+                return len;
+            }
+            let g = GridGeometry::new(lo, hi, l);
+            let first = sorted.is_none();
+            sorted = Some(l);
+            if first {
+                let (len, finer) = splat::count_vertices_and_finer(ws, &src, &g, 1);
+                ahead = finer.map(|f| (l + 1, f));
+                len
             } else {
-                while l > 1 {
-                    l -= 1;
-                    if fits(count(&mut self.ws, l)) {
-                        built = Some((l, self.build_counted_s1(&src, lo, hi, l)));
-                        break;
-                    }
-                }
+                splat::count_vertices(ws, &src, &g, 1)
             }
-            l
-        };
+        });
         let geometry = GridGeometry::new(lo, hi, chosen);
-        let s1_ms = match built {
-            Some((l, ms)) if l == chosen => ms,
-            _ => {
-                let s = Instant::now();
-                splat::splat_into(&mut self.ws, &src, &geometry, 1, &mut self.levels[0]);
-                s.elapsed().as_secs_f64() * 1e3
-            }
+        let s1_ms = if sorted == Some(chosen) {
+            self.build_counted_s1(&src, lo, hi, chosen)
+        } else {
+            let s = Instant::now();
+            splat::splat_into(&mut self.ws, &src, &geometry, 1, &mut self.levels[0]);
+            s.elapsed().as_secs_f64() * 1e3
         };
         let total = start.elapsed().as_secs_f64() * 1e3;
         t.push("level_count", (total - s1_ms).max(0.0));
@@ -411,6 +382,48 @@ impl GridBuilder {
     }
 }
 
+/// What builds a frame's hierarchy, frame after frame: the CPU's [`GridBuilder`], or another
+/// backend's (a GPU's) with the same contract: the grid placed by [`shifted_bounds`], the
+/// levels chosen by [`level_rule`] or fixed, levels 1..=l_max in vertex order with
+/// zero-intensity vertices removed, as [`LightingGrid`] documents.
+pub trait HierarchyBuilder: Send {
+    /// As [`GridBuilder::set_shift`].
+    fn set_shift(&mut self, shift: Option<Vec3>);
+
+    /// As [`GridBuilder::build`].
+    ///
+    /// # Errors
+    /// No lights, arrays of different lengths, or a non-finite or negative value.
+    fn build(
+        &mut self,
+        lights: &InputLights,
+        levels: LevelCount,
+        construction: Construction,
+    ) -> Result<BuildTimings, GridError>;
+
+    /// The last hierarchy built.
+    fn grid(&self) -> Option<&LightingGrid>;
+}
+
+impl HierarchyBuilder for GridBuilder {
+    fn set_shift(&mut self, shift: Option<Vec3>) {
+        GridBuilder::set_shift(self, shift);
+    }
+
+    fn build(
+        &mut self,
+        lights: &InputLights,
+        levels: LevelCount,
+        construction: Construction,
+    ) -> Result<BuildTimings, GridError> {
+        GridBuilder::build(self, lights, levels, construction)
+    }
+
+    fn grid(&self) -> Option<&LightingGrid> {
+        GridBuilder::grid(self)
+    }
+}
+
 impl LightingGrid {
     pub(crate) fn empty(geometry: GridGeometry) -> Self {
         Self {
@@ -426,9 +439,53 @@ impl LightingGrid {
     }
 }
 
+/// The box a hierarchy's grid is fitted to: the lights' bounds `lo`, `hi`, enlarged by
+/// [`GridBuilder::set_shift`]'s offset `shift` (u in [0, 1)^3) where there is one.
+#[must_use]
+pub fn shifted_bounds(lo: Vec3, hi: Vec3, shift: Option<Vec3>) -> (Vec3, Vec3) {
+    match shift {
+        Some(u) => {
+            let d = Vec3::splat(JITTER_SCALE * (hi - lo).max_element());
+            (lo - u * d, hi + (Vec3::ONE - u) * d)
+        }
+        None => (lo, hi),
+    }
+}
+
+/// The paper's level rule (LGH 2019 section 4.3): the largest l_max in 1..=[`MAX_LEVELS`]
+/// such that |S_1| < N/2, for `n` lights with bounds `lo`, `hi` (one level for fewer than two
+/// lights or a box of no size). `count(l)` is |S_1| with l levels. |S_1| grows with l_max,
+/// so the walk starts from a guess (for lights on surfaces |S_1| grows about 4x per level)
+/// and counts there and at its neighbours: usually two or three counts. Every builder (the
+/// CPU's, a GPU's) chooses by this one walk, so that they choose alike.
+pub fn level_rule(n: usize, lo: Vec3, hi: Vec3, mut count: impl FnMut(u32) -> usize) -> u32 {
+    if n < 2 || (hi - lo).max_element() <= 0.0 {
+        return 1;
+    }
+    let fits = |len: usize| 2 * len < n;
+    let guess = ((1.0 + (n as f64 / 8.0).max(1.0).log(4.0).floor()) as u32).clamp(1, MAX_LEVELS);
+    let mut l = guess;
+    if guess == 1 || fits(count(guess)) {
+        while l < MAX_LEVELS && fits(count(l + 1)) {
+            l += 1;
+        }
+    } else {
+        while l > 1 {
+            l -= 1;
+            if fits(count(l)) {
+                break;
+            }
+        }
+    }
+    l
+}
+
 /// Validates the input and returns its bounds (parallel reduction; min and max are exact, so
 /// the result does not depend on the split).
-fn bounds(lights: &InputLights) -> Result<(Vec3, Vec3), GridError> {
+///
+/// # Errors
+/// No lights, arrays of different lengths, or a non-finite or negative value.
+pub fn bounds(lights: &InputLights) -> Result<(Vec3, Vec3), GridError> {
     let n = lights.positions.len();
     let nn = lights.normals.map_or(n, <[Vec3]>::len);
     if n != lights.intensity.len() || nn != n {

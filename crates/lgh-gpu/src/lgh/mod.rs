@@ -4,8 +4,9 @@
 //! light, a representative VPL by contribution) and one shadow ray each through the uploaded
 //! BVH, giving S and U.
 //!
-//! The steps before the loop run on the CPU, as the CPU method runs them
-//! ([`LghFrame::prepare`]: hierarchies, representatives, tile binning), and the loop's inputs
+//! The hierarchies are built on the GPU ([`crate::grid`]) and read back; the other steps
+//! before the loop run on the CPU, as the CPU method runs them ([`LghFrame::prepare_with`]:
+//! representatives, tile binning), and the loop's inputs
 //! go up as flat tables ([`LghFrame::tables`]); the steps after it (the interleaving blur,
 //! the ratio estimator with its a-trous filter) run on the GPU in the loop's submission
 //! ([`crate::ratio`]), and the CPU composites ([`LghFrame::finish_shadowed`]). A blur wider
@@ -85,8 +86,13 @@ impl IndirectMethod for GpuLgh {
         if inputs.settings.shadows.k(shadowed, DEFAULT_SHADOW_SAMPLES) > 0 {
             supported(&inputs.settings.lgh)?;
         }
-        let prepared = LghFrame::prepare(inputs, shadowed, memory, true)
+        let fail = |e: GpuError| RenderError::Backend(e.to_string());
+        let ctx = GpuContext::shared().map_err(fail)?;
+        // The hierarchies built on the GPU (the gather construction on the CPU).
+        let mut builder = crate::grid::GpuGridBuilder::new(ctx);
+        let prepared = LghFrame::prepare_with(inputs, shadowed, memory, true, Some(&mut builder))
             .map_err(|e| RenderError::Backend(e.to_string()))?;
+        drop(builder);
         let frame = match prepared {
             Prepared::Dark(output) => return Ok(output),
             Prepared::Frame(frame) => frame,
@@ -95,8 +101,6 @@ impl IndirectMethod for GpuLgh {
         let tables = frame.tables(g.width, g.height).ok_or_else(|| {
             RenderError::Backend("lgh on the GPU: the hierarchies' tables are missing".into())
         })?;
-        let fail = |e: GpuError| RenderError::Backend(e.to_string());
-        let ctx = GpuContext::shared().map_err(fail)?;
         let filter = frame.ratio_filter(inputs);
         if crate::ratio::supported(&filter) {
             // The loop, the blur and the ratio estimator in one submission.

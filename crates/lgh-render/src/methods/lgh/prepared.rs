@@ -9,8 +9,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
-use lgh_core::lighting_grid::GridError;
 use lgh_core::lighting_grid::partition::ShadedLevels;
+use lgh_core::lighting_grid::{GridError, HierarchyBuilder};
 use lgh_core::rng::Rng;
 use lgh_core::timing::Timings;
 use lgh_core::vpl::Vpls;
@@ -94,6 +94,21 @@ impl LghFrame {
         memory: &mut FrameMemory,
         tables: bool,
     ) -> Result<Prepared, GridError> {
+        Self::prepare_with(inputs, shadowed, memory, tables, None)
+    }
+
+    /// [`LghFrame::prepare`] with the hierarchies built by `builder` (a backend's, e.g. a
+    /// GPU's) instead of the CPU's in `memory`.
+    ///
+    /// # Errors
+    /// The VPLs cannot form a hierarchy (non-finite values).
+    pub fn prepare_with(
+        inputs: &MethodInputs,
+        shadowed: bool,
+        memory: &mut FrameMemory,
+        tables: bool,
+        builder: Option<&mut dyn HierarchyBuilder>,
+    ) -> Result<Prepared, GridError> {
         let MethodInputs {
             gbuffer: g,
             camera: frame,
@@ -102,7 +117,10 @@ impl LghFrame {
             ..
         } = *inputs;
         let (settings, seed) = (&all.lgh, all.seed);
-        let builder = &mut memory.grid;
+        let builder: &mut dyn HierarchyBuilder = match builder {
+            Some(b) => b,
+            None => &mut memory.grid,
+        };
         builder.set_shift(settings.grid_jitter.then(|| {
             let mut rng = Rng::new(&[seed, STREAM_GRID_SHIFT]);
             Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())

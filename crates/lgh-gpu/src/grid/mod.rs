@@ -1,0 +1,569 @@
+//! The lighting grid hierarchy built on the GPU (Lin & Yuksel 2019 section 3.1): S_1 by a
+//! trilinear splat of the lights, every coarser level by exact restriction from the one
+//! below (`lgh_core`'s [`Construction::Restrict`], which equals the all-scatter
+//! hierarchy), the number of levels by the paper's rule (section 4.3,
+//! [`lighting_grid::level_rule`]). The result is read back as a [`LightingGrid`] for the
+//! steps that still run on the CPU (representatives, tables, binning).
+//!
+//! The passes (`shaders/grid/`), with the grid placed as the CPU places it
+//! ([`lighting_grid::bounds`], [`lighting_grid::shifted_bounds`]):
+//!
+//! 1. `mark`: every light sets, in a bit set per resolution (2^k cells per axis), the bits of
+//!    the vertices it gives a non-zero weight; a [`scan`](crate::scan) of the words'
+//!    population counts numbers the marked vertices, and `counts` gives each resolution's
+//!    count, read back with the largest intensity (one wait): the level rule needs |S_1| at
+//!    several level counts, and the next passes' buffers their sizes;
+//! 2. `list` writes each marked vertex's key; `splat` adds every light's trilinear
+//!    contributions to S_1's sums in 96-bit fixed point with integer atomics (exact, so the
+//!    result does not depend on the order of the adds); `s1_sums` turns them into floats;
+//!    `restrict` gathers each coarser level from its 27 finer neighbours in a fixed order;
+//!    `emit` writes every vertex's grid light, level by level, read back in one copy (the
+//!    second wait); the CPU drops zero-intensity lights as it unpacks them.
+//!
+//! Memory: a bit per vertex of every resolution in use (17 MB at the finest, 512 cells per
+//! axis), 156 bytes per S_1 vertex of sums and 68 per vertex of every level. The gather
+//! construction, and inputs the adapter's buffers cannot hold, are built by the CPU's
+//! builder instead (the same contract, [`HierarchyBuilder`]).
+
+use std::sync::{Mutex, PoisonError};
+use std::time::Instant;
+
+use glam::{UVec3, Vec3};
+use lgh_core::lighting_grid::{
+    self, BuildTimings, Construction, GridBuilder, GridError, GridGeometry, HierarchyBuilder,
+    InputLights, LevelCount, LightingGrid, MAX_LEVELS,
+};
+use rayon::prelude::*;
+
+use crate::batch::Batch;
+use crate::context::{GpuContext, GpuError};
+use crate::pool::Lease;
+
+/// Floats per light in the uploaded lights: position, intensity, normal.
+const LIGHT_FLOATS: usize = 9;
+/// Words per grid light read back (vertex and mass, position, intensity, normal; the
+/// deviation in the fourth word of the last three).
+const RECORD_WORDS: usize = 16;
+/// Words of the fixed-point sums per S_1 vertex (13 sums of three words).
+const ACC_WORDS: u64 = 39;
+/// Floats per vertex of the sums of every level (13 used).
+const SUM_FLOATS: u64 = 16;
+
+/// The parameters of one dispatch (`GridParams` in `shaders/grid/common.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct GridParams {
+    origin: [f32; 3],
+    h_top: f32,
+    n: u32,
+    k: u32,
+    count: u32,
+    word0: u32,
+    fine_word0: u32,
+    vert0: u32,
+    imax: f32,
+    inv_imax: f32,
+    pad: [u32; 4],
+}
+
+/// The WGSL sources of the build's kernels, by name.
+#[must_use]
+pub fn sources() -> Vec<(&'static str, String)> {
+    let common = include_str!("../shaders/grid/common.wgsl");
+    let lookup = include_str!("../shaders/grid/lookup.wgsl");
+    let with = |parts: &[&str]| {
+        let mut all = vec![common];
+        all.extend_from_slice(parts);
+        crate::kernel(&all)
+    };
+    vec![
+        (
+            "grid mark",
+            with(&[include_str!("../shaders/grid/mark.wgsl")]),
+        ),
+        (
+            "grid counts",
+            with(&[include_str!("../shaders/grid/counts.wgsl")]),
+        ),
+        (
+            "grid list",
+            with(&[include_str!("../shaders/grid/list.wgsl")]),
+        ),
+        (
+            "grid splat",
+            with(&[include_str!("../shaders/grid/splat.wgsl"), lookup]),
+        ),
+        (
+            "grid s1 sums",
+            with(&[include_str!("../shaders/grid/s1_sums.wgsl")]),
+        ),
+        (
+            "grid restrict",
+            with(&[include_str!("../shaders/grid/restrict.wgsl"), lookup]),
+        ),
+        (
+            "grid emit",
+            with(&[include_str!("../shaders/grid/emit.wgsl")]),
+        ),
+    ]
+}
+
+/// The compiled pipeline of kernel `name` of [`sources`].
+fn pipeline(ctx: &GpuContext, name: &'static str) -> std::sync::Arc<wgpu::ComputePipeline> {
+    ctx.pipeline(name, || {
+        sources()
+            .into_iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, s)| s)
+            .unwrap_or_default()
+    })
+}
+
+/// What a GPU builder keeps between frames: the grid's buffers, and the CPU builder it
+/// hands what it does not build.
+#[derive(Debug, Default)]
+pub struct GridState {
+    grid: Option<LightingGrid>,
+    cpu: GridBuilder,
+    /// Whether the last build was the CPU's.
+    on_cpu: bool,
+    shift: Option<Vec3>,
+}
+
+/// Builds hierarchies on the GPU of `ctx` ([`HierarchyBuilder`]); the working memory comes
+/// from the context's pools and goes back when the builder is dropped.
+pub struct GpuGridBuilder<'c> {
+    ctx: &'c GpuContext,
+    state: Option<GridState>,
+    /// Why the last build ran on the CPU, if it did because of the GPU.
+    pub fallback: Option<String>,
+}
+
+/// States kept per context: one per frame building at once.
+#[derive(Debug, Default)]
+pub(crate) struct GridStates(Mutex<Vec<GridState>>);
+
+impl<'c> GpuGridBuilder<'c> {
+    /// A builder on `ctx`, with the buffers of an earlier builder where one was dropped.
+    #[must_use]
+    pub fn new(ctx: &'c GpuContext) -> Self {
+        let state = ctx
+            .grid_states()
+            .0
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .pop()
+            .unwrap_or_default();
+        Self {
+            ctx,
+            state: Some(state),
+            fallback: None,
+        }
+    }
+
+    fn state(&mut self) -> &mut GridState {
+        self.state.get_or_insert_with(GridState::default)
+    }
+}
+
+impl Drop for GpuGridBuilder<'_> {
+    fn drop(&mut self) {
+        if let Some(s) = self.state.take() {
+            let mut kept = self
+                .ctx
+                .grid_states()
+                .0
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner);
+            if kept.len() < 2 {
+                kept.push(s);
+            }
+        }
+    }
+}
+
+impl HierarchyBuilder for GpuGridBuilder<'_> {
+    fn set_shift(&mut self, shift: Option<Vec3>) {
+        let s = self.state();
+        s.shift = shift.map(|u| u.clamp(Vec3::ZERO, Vec3::ONE));
+        s.cpu.set_shift(shift);
+    }
+
+    fn build(
+        &mut self,
+        lights: &InputLights,
+        levels: LevelCount,
+        construction: Construction,
+    ) -> Result<BuildTimings, GridError> {
+        self.fallback = None;
+        if construction != Construction::GatherFromS1 {
+            let mut t = BuildTimings::default();
+            let (lo, hi) = t.time("bounds", || lighting_grid::bounds(lights))?;
+            let ctx = self.ctx;
+            let state = self.state();
+            let (lo, hi) = lighting_grid::shifted_bounds(lo, hi, state.shift);
+            let grid = state
+                .grid
+                .get_or_insert_with(|| GridBuilder::default().into_grid());
+            match build_on(ctx, lights, levels, lo, hi, grid, &mut t) {
+                Ok(()) => {
+                    state.on_cpu = false;
+                    return Ok(t);
+                }
+                Err(e) => self.fallback = Some(e.to_string()),
+            }
+        }
+        let state = self.state();
+        state.on_cpu = true;
+        state.cpu.build(lights, levels, construction)
+    }
+
+    fn grid(&self) -> Option<&LightingGrid> {
+        let s = self.state.as_ref()?;
+        if s.on_cpu {
+            s.cpu.grid()
+        } else {
+            s.grid.as_ref()
+        }
+    }
+}
+
+/// The first word of each resolution's bit set, for `count` resolutions (count + 1 entries).
+fn word_starts(count: u32) -> Vec<u32> {
+    let mut starts = vec![0u32];
+    let mut at = 0u64;
+    for k in 0..count {
+        let side = (1u64 << k) + 1;
+        at += (side * side * side).div_ceil(32);
+        starts.push(at as u32);
+    }
+    starts
+}
+
+/// Builds the hierarchy of `lights` in the box `lo`, `hi` on the GPU into `grid`.
+fn build_on(
+    ctx: &GpuContext,
+    lights: &InputLights,
+    levels: LevelCount,
+    lo: Vec3,
+    hi: Vec3,
+    grid: &mut LightingGrid,
+    t: &mut BuildTimings,
+) -> Result<(), GpuError> {
+    let n = lights.positions.len();
+    let top = GridGeometry::new(lo, hi, MAX_LEVELS);
+    let degenerate = n < 2 || (hi - lo).max_element() <= 0.0;
+    let marks = match levels {
+        LevelCount::Fixed(l) => l.clamp(1, MAX_LEVELS),
+        LevelCount::Auto if degenerate => 1,
+        LevelCount::Auto => MAX_LEVELS,
+    };
+    let base = GridParams {
+        origin: top.origin.to_array(),
+        h_top: top.h_top,
+        count: marks,
+        ..GridParams::default()
+    };
+    let invocations = |items: usize| items.min(64 * 65_535);
+
+    // Step 1: the lights up, the marks, their numbering and the counts.
+    let start = Instant::now();
+    let up = upload_lights(ctx, lights)?;
+    let starts = word_starts(marks);
+    let words = starts[marks as usize] as usize;
+    let word_start = ctx.upload("grid word starts", &starts)?;
+    let bits = ctx.output("grid bits", 4 * words as u64)?;
+    let prefix = ctx.output("grid prefix", 4 * words as u64)?;
+    let total = ctx.output("grid total", 16)?;
+    let misc = ctx.output("grid misc", 4 * 16)?;
+    t.push("gpu_upload", start.elapsed().as_secs_f64() * 1e3);
+    let start = Instant::now();
+    let mut batch = Batch::new(ctx);
+    batch.clear_lease(&bits);
+    batch.clear_lease(&misc);
+    let mark = pipeline(ctx, "grid mark");
+    let params = ctx.uniform(
+        "grid params",
+        &GridParams {
+            n: n as u32,
+            ..base
+        },
+    );
+    let bind = ctx.bind_group(
+        &mark,
+        vec![
+            params.as_entire_binding(),
+            up.binding(),
+            word_start.binding(),
+            bits.binding(),
+            misc.binding(),
+        ],
+    );
+    batch.dispatch("grid_mark", &mark, &bind, invocations(n))?;
+    crate::scan::record(ctx, &mut batch, &bits, &prefix, &total, words, true)?;
+    let counts = pipeline(ctx, "grid counts");
+    let bind = ctx.bind_group(
+        &counts,
+        vec![
+            params.as_entire_binding(),
+            word_start.binding(),
+            prefix.binding(),
+            total.binding(),
+            misc.binding(),
+        ],
+    );
+    batch.dispatch("grid_counts", &counts, &bind, marks as usize)?;
+    batch.read(misc.buffer(), misc.bytes())?;
+    let (reads, gpu) = batch.finish()?;
+    let misc_words: &[u32] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
+    let count_at = |k: u32| misc_words.get(1 + k as usize).copied().unwrap_or(0) as usize;
+    let imax = f32::from_bits(misc_words.first().copied().unwrap_or(0));
+    for &(name, ms) in &gpu {
+        t.push(name, ms);
+    }
+    let l_max = match levels {
+        LevelCount::Fixed(l) => l.clamp(1, MAX_LEVELS),
+        LevelCount::Auto => lighting_grid::level_rule(n, lo, hi, |l| count_at(l - 1)),
+    };
+    t.push("level_count", start.elapsed().as_secs_f64() * 1e3);
+
+    // Step 2: S_1's sums, the coarser levels, the grid lights.
+    let start = Instant::now();
+    let used = l_max as usize;
+    let mut vert_start = vec![0u32; used + 1];
+    for k in 0..used {
+        vert_start[k + 1] = vert_start[k] + count_at(k as u32) as u32;
+    }
+    // Records level by level, S_1 (the finest resolution in use) first.
+    let mut out_start = vec![0u32; used];
+    let mut at = 0u32;
+    for k in (0..used).rev() {
+        out_start[k] = at;
+        at += count_at(k as u32) as u32;
+    }
+    let vertices = vert_start[used] as usize;
+    let s1 = count_at(l_max - 1);
+    let mut layout = vert_start.clone();
+    layout.extend_from_slice(&out_start);
+    let layout_buf = ctx.upload("grid layout", &layout)?;
+    let keys = ctx.output("grid keys", 4 * vertices as u64)?;
+    let acc = ctx.output("grid fixed sums", 4 * ACC_WORDS * s1 as u64)?;
+    let sums = ctx.output("grid sums", 4 * SUM_FLOATS * vertices as u64)?;
+    let records = ctx.output("grid lights", 4 * (RECORD_WORDS * vertices) as u64)?;
+    let base = GridParams {
+        count: l_max,
+        imax,
+        inv_imax: if imax > 0.0 { 1.0 / imax } else { 0.0 },
+        ..base
+    };
+    let mut batch = Batch::new(ctx);
+    batch.clear_lease(&acc);
+    let dispatch = |batch: &mut Batch<'_>,
+                    name: &'static str,
+                    kernel: &'static str,
+                    p: GridParams,
+                    buffers: Vec<wgpu::BindingResource<'_>>|
+     -> Result<(), GpuError> {
+        let pipe = pipeline(ctx, kernel);
+        let uniform = ctx.uniform("grid params", &p);
+        let mut resources = vec![uniform.as_entire_binding()];
+        resources.extend(buffers);
+        let bind = ctx.bind_group(&pipe, resources);
+        batch.dispatch(name, &pipe, &bind, invocations(p.n as usize))
+    };
+    dispatch(
+        &mut batch,
+        "grid_list",
+        "grid list",
+        GridParams {
+            n: starts[used],
+            ..base
+        },
+        vec![
+            word_start.binding(),
+            bits.binding(),
+            prefix.binding(),
+            keys.binding(),
+        ],
+    )?;
+    let k1 = l_max - 1;
+    dispatch(
+        &mut batch,
+        "grid_splat",
+        "grid splat",
+        GridParams {
+            n: n as u32,
+            k: k1,
+            word0: starts[k1 as usize],
+            vert0: vert_start[k1 as usize],
+            ..base
+        },
+        vec![
+            up.binding(),
+            bits.binding(),
+            prefix.binding(),
+            acc.binding(),
+        ],
+    )?;
+    dispatch(
+        &mut batch,
+        "grid_s1",
+        "grid s1 sums",
+        GridParams {
+            n: s1 as u32,
+            vert0: vert_start[k1 as usize],
+            ..base
+        },
+        vec![acc.binding(), sums.binding()],
+    )?;
+    for k in (0..k1).rev() {
+        dispatch(
+            &mut batch,
+            "grid_restrict",
+            "grid restrict",
+            GridParams {
+                n: count_at(k) as u32,
+                k,
+                fine_word0: starts[k as usize + 1],
+                vert0: vert_start[k as usize],
+                ..base
+            },
+            vec![
+                keys.binding(),
+                bits.binding(),
+                prefix.binding(),
+                sums.binding(),
+            ],
+        )?;
+    }
+    dispatch(
+        &mut batch,
+        "grid_emit",
+        "grid emit",
+        GridParams {
+            n: vertices as u32,
+            ..base
+        },
+        vec![
+            layout_buf.binding(),
+            keys.binding(),
+            sums.binding(),
+            records.binding(),
+        ],
+    )?;
+    batch.read(records.buffer(), records.bytes())?;
+    let (reads, gpu) = batch.finish()?;
+    for &(name, ms) in &gpu {
+        t.push(name, ms);
+    }
+    t.push("gpu_build", start.elapsed().as_secs_f64() * 1e3);
+    let start = Instant::now();
+    let words: &[u32] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
+    let counts: Vec<usize> = (1..=l_max).map(|l| count_at(l_max - l)).collect();
+    unpack(
+        GridGeometry::new(lo, hi, l_max),
+        &counts,
+        words,
+        lights.normals.is_some(),
+        grid,
+    );
+    t.push("unpack", start.elapsed().as_secs_f64() * 1e3);
+    Ok(())
+}
+
+/// The lights as a storage buffer of [`LIGHT_FLOATS`] floats each (the normal zero where
+/// the lights have none), packed straight into the queue's staging memory in parallel.
+fn upload_lights<'c>(ctx: &'c GpuContext, lights: &InputLights) -> Result<Lease<'c>, GpuError> {
+    let n = lights.positions.len();
+    let lease = ctx.lease(
+        "grid lights in",
+        4 * (LIGHT_FLOATS * n) as u64,
+        GpuContext::STORAGE,
+    )?;
+    let value = |i: usize| -> f32 {
+        let (light, c) = (i / LIGHT_FLOATS, i % LIGHT_FLOATS);
+        let v = match c / 3 {
+            0 => lights.positions[light],
+            1 => lights.intensity[light],
+            _ => lights.normals.map_or(Vec3::ZERO, |m| m[light]),
+        };
+        v[c % 3]
+    };
+    let floats = LIGHT_FLOATS * n;
+    ctx.write_parallel(lease.buffer(), lease.bytes(), |at, out| {
+        for (j, word) in out.chunks_exact_mut(4).enumerate() {
+            let i = at / 4 + j;
+            let v = if i < floats { value(i) } else { 0.0 };
+            word.copy_from_slice(&v.to_ne_bytes());
+        }
+    });
+    Ok(lease)
+}
+
+/// One grid light as read back.
+#[derive(Clone, Copy)]
+struct Record<'a>(&'a [u32]);
+
+impl Record<'_> {
+    fn float3(&self, at: usize) -> Vec3 {
+        Vec3::new(
+            f32::from_bits(self.0[at]),
+            f32::from_bits(self.0[at + 1]),
+            f32::from_bits(self.0[at + 2]),
+        )
+    }
+
+    fn intensity(&self) -> Vec3 {
+        self.float3(8)
+    }
+}
+
+/// The read-back grid lights (`counts[l - 1]` of level l, level by level) into `grid`,
+/// without the zero-intensity ones (the CPU build's compaction), normals zero where the
+/// lights had none.
+fn unpack(
+    geometry: GridGeometry,
+    counts: &[usize],
+    words: &[u32],
+    normals: bool,
+    grid: &mut LightingGrid,
+) {
+    grid.geometry = geometry;
+    grid.level_start.clear();
+    grid.level_start.push(0);
+    let mut kept: Vec<Record<'_>> = Vec::new();
+    let mut at = 0usize;
+    for &c in counts {
+        let end = (at + c).min(words.len() / RECORD_WORDS);
+        kept.par_extend(
+            words[RECORD_WORDS * at..RECORD_WORDS * end]
+                .par_chunks_exact(RECORD_WORDS)
+                .map(Record)
+                .filter(|r| r.intensity().max_element() > 0.0),
+        );
+        grid.level_start.push(kept.len() as u32);
+        at = end;
+    }
+    let fill = |out: &mut Vec<Vec3>, f: &(dyn Fn(&Record<'_>) -> Vec3 + Sync)| {
+        out.clear();
+        out.par_extend(kept.par_iter().map(f));
+    };
+    grid.vertex.clear();
+    grid.vertex
+        .par_extend(kept.par_iter().map(|r| UVec3::new(r.0[0], r.0[1], r.0[2])));
+    grid.mass.clear();
+    grid.mass
+        .par_extend(kept.par_iter().map(|r| f32::from_bits(r.0[3])));
+    fill(&mut grid.position, &|r| r.float3(4));
+    fill(&mut grid.intensity, &|r| r.intensity());
+    fill(&mut grid.normal, &|r| {
+        if normals { r.float3(12) } else { Vec3::ZERO }
+    });
+    fill(&mut grid.deviation, &|r| {
+        Vec3::new(
+            f32::from_bits(r.0[7]),
+            f32::from_bits(r.0[11]),
+            f32::from_bits(r.0[15]),
+        )
+    });
+}

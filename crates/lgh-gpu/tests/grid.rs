@@ -1,0 +1,188 @@
+//! The hierarchy built on the GPU (`lgh_gpu::grid`) against the CPU's build by restriction:
+//! the same levels and vertices, the same grid lights to rounding, on lights on surfaces,
+//! in a box, on a plane, far from the origin, one light; and the same from run to run.
+
+use glam::Vec3;
+use lgh_core::lighting_grid::synthetic::lights_on_surfaces;
+use lgh_core::lighting_grid::{
+    Construction, GridBuilder, HierarchyBuilder, InputLights, LevelCount, LightingGrid,
+};
+use lgh_core::rng::Rng;
+use lgh_gpu::GpuContext;
+use lgh_gpu::grid::GpuGridBuilder;
+
+struct Lights {
+    p: Vec<Vec3>,
+    i: Vec<Vec3>,
+    n: Vec<Vec3>,
+}
+
+impl Lights {
+    fn input(&self) -> InputLights<'_> {
+        InputLights {
+            positions: &self.p,
+            intensity: &self.i,
+            normals: Some(&self.n),
+        }
+    }
+}
+
+fn surfaces(n: usize, seed: u64) -> Lights {
+    let s = lights_on_surfaces(n, seed);
+    Lights {
+        p: s.positions,
+        i: s.intensity,
+        n: s.normals,
+    }
+}
+
+/// Lights in the box `offset + scale x [0, 1)^3` (a plane where a scale is 0), one in ten
+/// dark.
+fn in_box(n: usize, seed: u64, scale: Vec3, offset: Vec3) -> Lights {
+    let mut r = Rng::new(&[seed, 17]);
+    let mut l = Lights {
+        p: vec![],
+        i: vec![],
+        n: vec![],
+    };
+    for k in 0..n {
+        l.p.push(offset + scale * Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()));
+        let dark = k % 10 == 3;
+        let c = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 5.0;
+        l.i.push(if dark { Vec3::ZERO } else { c });
+        l.n.push(Vec3::new(r.next_f32() - 0.5, 1.0, r.next_f32() - 0.5).normalize());
+    }
+    l
+}
+
+fn cpu(l: &Lights, levels: LevelCount, shift: Option<Vec3>) -> LightingGrid {
+    let mut b = GridBuilder::default();
+    b.set_shift(shift);
+    b.build(&l.input(), levels, Construction::Restrict)
+        .expect("cpu build");
+    b.into_grid()
+}
+
+fn gpu(ctx: &GpuContext, l: &Lights, levels: LevelCount, shift: Option<Vec3>) -> LightingGrid {
+    let mut b = GpuGridBuilder::new(ctx);
+    HierarchyBuilder::set_shift(&mut b, shift);
+    HierarchyBuilder::build(&mut b, &l.input(), levels, Construction::Restrict).expect("gpu build");
+    assert_eq!(b.fallback, None, "the build fell back to the CPU");
+    HierarchyBuilder::grid(&b).expect("a grid").clone()
+}
+
+/// The GPU's hierarchy equals the CPU's: the same geometry, levels and vertices; positions
+/// within 1e-5 h_top (plus an ulp of far coordinates); intensities within 1e-4 of the
+/// light plus 1e-6 of its level's brightest, masses within 1e-4 plus four ulps of a
+/// light's offset in S_1's cells per light: that offset (up to 2^9) may differ by an ulp
+/// from the CPU's (WGSL's division is not exact; `div_rn` corrects most of it), and the GPU
+/// sums S_1 in fixed point and the coarser levels in f32, the CPU in f64. Deviations within
+/// 1e-3 h_top, normals within 1e-4.
+fn assert_close(a: &LightingGrid, b: &LightingGrid, what: &str) {
+    assert_eq!(a.geometry, b.geometry, "{what}: geometry");
+    assert_eq!(a.level_start, b.level_start, "{what}: levels");
+    assert_eq!(a.vertex, b.vertex, "{what}: vertices");
+    let h = a.geometry.h_top;
+    let far = a.geometry.origin.abs().max_element() * 4.0 * f32::EPSILON;
+    // Four ulps of a light's offset in S_1's cells (up to 2^(l_max - 1)): what a weight may
+    // move by.
+    let ulp_weight = 4.0 * f32::EPSILON * (1u32 << (a.l_max() - 1)) as f32;
+    for l in 1..=a.l_max() {
+        let r = a.level_range(l);
+        let brightest = a.intensity[r.clone()]
+            .iter()
+            .fold(0.0f32, |m, c| m.max(c.max_element()));
+        for k in r {
+            let d = (a.position[k] - b.position[k]).abs().max_element();
+            assert!(
+                d <= 1e-5 * h + far,
+                "{what}: level {l} light {k}: position {d}"
+            );
+            let tol = 1e-4 * a.intensity[k].max_element() + 1e-6 * brightest;
+            let d = (a.intensity[k] - b.intensity[k]).abs().max_element();
+            assert!(
+                d <= tol,
+                "{what}: level {l} light {k}: intensity {d} > {tol}"
+            );
+            let d = (a.deviation[k] - b.deviation[k]).abs().max_element();
+            assert!(d <= 1e-3 * h, "{what}: level {l} light {k}: deviation {d}");
+            let d = (a.normal[k] - b.normal[k]).abs().max_element();
+            assert!(d <= 1e-4, "{what}: level {l} light {k}: normal {d}");
+            let d = (a.mass[k] - b.mass[k]).abs();
+            let tol = 1e-4 * a.mass[k] + ulp_weight;
+            assert!(
+                d <= tol,
+                "{what}: level {l} light {k}: mass {a} vs {b}",
+                a = a.mass[k],
+                b = b.mass[k]
+            );
+        }
+    }
+}
+
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn gpu_hierarchy_equals_the_cpu_restriction() {
+    let ctx = GpuContext::shared().expect("an adapter");
+    let shift = Some(Vec3::new(0.3, 0.71, 0.05));
+    let cases = [
+        (
+            "surfaces, auto",
+            surfaces(20_000, 3),
+            LevelCount::Auto,
+            None,
+        ),
+        (
+            "surfaces, shifted",
+            surfaces(5000, 4),
+            LevelCount::Auto,
+            shift,
+        ),
+        (
+            "box, 5 levels",
+            in_box(3000, 8, Vec3::new(3.0, 1.0, 2.0), Vec3::new(-5.0, 1.0, 0.0)),
+            LevelCount::Fixed(5),
+            None,
+        ),
+        (
+            "plane, auto",
+            in_box(4000, 9, Vec3::new(4.0, 0.0, 2.0), Vec3::new(-1.0, 2.0, 0.5)),
+            LevelCount::Auto,
+            None,
+        ),
+        (
+            "far, auto",
+            in_box(2000, 10, Vec3::new(3.0, 1.0, 2.0), Vec3::splat(1.0e4)),
+            LevelCount::Auto,
+            None,
+        ),
+        (
+            "one light",
+            in_box(1, 11, Vec3::ONE, Vec3::ZERO),
+            LevelCount::Fixed(3),
+            None,
+        ),
+    ];
+    for (what, lights, levels, shift) in &cases {
+        let a = cpu(lights, *levels, *shift);
+        let b = gpu(ctx, lights, *levels, *shift);
+        assert_close(&a, &b, what);
+    }
+}
+
+/// Integer sums do not depend on the order of the atomic adds: two builds are identical.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn gpu_hierarchy_is_the_same_from_run_to_run() {
+    let ctx = GpuContext::shared().expect("an adapter");
+    let lights = surfaces(30_000, 5);
+    let a = gpu(ctx, &lights, LevelCount::Auto, None);
+    let b = gpu(ctx, &lights, LevelCount::Auto, None);
+    assert_eq!(a, b);
+}
