@@ -5,8 +5,9 @@
 # and the hierarchy rebuilt every frame, the viewer's settings, k = 4), with the lighting loop
 # on the GPU, and writes one JSON file: the adapter, and per case the median ms per frame and
 # per pass (the GPU pass from its timestamps where the adapter has them), the same frame on
-# the CPU for comparison, plus `lgh bench render --device gpu` (the paper's Tables 2 and 3) on
-# the default scene.
+# the CPU for comparison, the hierarchy build of each scene's VPLs on the GPU and on the CPU
+# (`lgh bench build --device gpu|cpu`), plus `lgh bench render --device gpu` (the paper's
+# Tables 2 and 3) on the default scene.
 #
 # Usage: scripts/gpu-bench.sh [OUT.json]   (default gpu-bench.json)
 # Environment: SIZE (1280x720), VPLS ("100000 1000000"), FRAMES (12), CPU_FRAMES (4; 0 skips
@@ -84,6 +85,18 @@ for i in "${!scenes[@]}"; do
     cases+=("{\"scene\": \"${names[$i]}\", \"vpls\": $n, \"camera\": \"moving\", \"view\": $(cat "$tmp/$name-gpu.json"), \"view_cpu\": null}")
 done
 
+# The hierarchy build of the VPLs of each scene, 100K and 1M, on the GPU and on the CPU
+# (the restriction; `lgh bench build`, Table 1 of the paper): per step and per GPU pass.
+builds=()
+for i in "${!scenes[@]}"; do
+    for dev in gpu cpu; do
+        name="build-${names[$i]}-$dev"
+        step "$name" sh -c '"$0" bench build --device "$1" --lights "$2" --runs 5 --scene "$3" \
+            --json >"$4"' "$lgh" "$dev" "${vpls// /,}" "${scenes[$i]}" "$tmp/$name.json"
+        builds+=("{\"scene\": \"${names[$i]}\", \"device\": \"$dev\", \"build\": $(cat "$tmp/$name.json")}")
+    done
+done
+
 # The paper's tables with the loop on the GPU (its JSON names the adapter).
 step tables sh -c "\"$lgh\" bench render --device gpu --size $size --vpls ${vpls// /,} \
     --runs 3 --interleave 1,4 --json >\"$tmp/tables.json\""
@@ -102,6 +115,7 @@ fi
     echo "  \"size\": \"$size\","
     echo "  \"tables\": $(cat "$tmp/tables.json"),"
     echo "  \"tables_sponza\": $sponza_tables,"
+    echo "  \"builds\": [$(IFS=,; echo "${builds[*]}")],"
     echo "  \"cases\": ["
     for j in "${!cases[@]}"; do
         sep=","

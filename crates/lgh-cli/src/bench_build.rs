@@ -7,9 +7,13 @@ use anyhow::{Result, bail};
 use clap::Args;
 use glam::Vec3;
 use lgh_core::lighting_grid::synthetic::lights_on_surfaces;
-use lgh_core::lighting_grid::{Construction, GridBuilder, InputLights, LevelCount};
+use lgh_core::lighting_grid::{
+    Construction, GridBuilder, HierarchyBuilder, InputLights, LevelCount,
+};
+use lgh_gpu::grid::GpuGridBuilder;
 use lgh_render::World;
 use lgh_render::passes::vpl_gen::{PathNumbers, generate_vpls};
+use lgh_render::settings::Device;
 
 use crate::bench_cmd::median;
 use crate::scene_arg::load_scene;
@@ -39,10 +43,41 @@ pub struct BuildArgs {
     /// Threads and output.
     #[command(flatten)]
     pub options: crate::bench_cmd::BenchOptions,
+    /// Where the hierarchy is built: `cpu`, or `gpu` (the restriction on the GPU through
+    /// wgpu, read back; the gather and all-scatter variants run on the CPU only). On the
+    /// GPU the report adds each GPU pass's time from its timestamps.
+    #[arg(long, value_enum, default_value_t = Device::Cpu)]
+    pub device: Device,
     /// Print the totals as a Markdown table (rows: lights; columns: variants), the form of
     /// docs/performance.md.
     #[arg(long)]
     pub markdown: bool,
+}
+
+/// The builder of one variant: the CPU's, or the GPU's (which also gives pass times).
+enum Builder<'c> {
+    Cpu(GridBuilder),
+    Gpu(GpuGridBuilder<'c>),
+}
+
+impl Builder<'_> {
+    fn get(&mut self) -> &mut dyn HierarchyBuilder {
+        match self {
+            Self::Cpu(b) => b,
+            Self::Gpu(b) => b,
+        }
+    }
+
+    /// The GPU's pass times of the last build; an error if it fell back to the CPU.
+    fn passes(&self) -> Result<Vec<(&'static str, f64)>> {
+        match self {
+            Self::Cpu(_) => Ok(Vec::new()),
+            Self::Gpu(b) => match &b.fallback {
+                Some(why) => bail!("the GPU build failed: {why}"),
+                None => Ok(b.passes.clone()),
+            },
+        }
+    }
 }
 
 struct Input {
@@ -61,6 +96,19 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         Some(p) => Some(World::new(load_scene(Some(p))?)),
         None => None,
     };
+    let ctx = match args.device {
+        Device::Cpu => None,
+        Device::Gpu => Some(lgh_gpu::GpuContext::shared()?),
+    };
+    let constructions: &[Construction] = match args.device {
+        Device::Cpu => &[
+            Construction::GatherFromS1,
+            Construction::ScatterAll,
+            Construction::Restrict,
+        ],
+        Device::Gpu => &[Construction::Restrict],
+    };
+    let device = ctx.map_or_else(|| "cpu".to_owned(), |c| c.adapter_name());
     let mut rows = Vec::new();
     for &n in &args.lights {
         let input = match &world {
@@ -86,25 +134,33 @@ pub fn run(args: &BuildArgs) -> Result<()> {
             intensity: &input.intensity,
             normals: Some(&input.normals),
         };
-        for construction in [
-            Construction::GatherFromS1,
-            Construction::ScatterAll,
-            Construction::Restrict,
-        ] {
+        for &construction in constructions {
             let mut steps: BTreeMap<String, Vec<f64>> = BTreeMap::new();
             let mut order: Vec<String> = Vec::new();
             let mut totals = Vec::new();
             // One builder across runs, as a renderer keeps it across frames; the first (cold)
             // run is not timed, and gives the peak working memory.
-            let mut builder = GridBuilder::default();
+            let mut builder = match ctx {
+                Some(c) => Builder::Gpu(GpuGridBuilder::new(c)),
+                None => Builder::Cpu(GridBuilder::default()),
+            };
             let base = crate::sysmem::reset_peak();
-            builder.build(&lights, levels, construction)?;
+            builder.get().build(&lights, levels, construction)?;
+            builder.passes()?;
             let peak = match (base, crate::sysmem::peak_bytes()) {
                 (Some(b), Some(p)) => p.saturating_sub(b),
                 _ => 0,
             };
+            let mut gpu: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
+            let mut gpu_order = Vec::new();
             for _ in 0..args.runs.max(1) {
-                let t = builder.build(&lights, levels, construction)?;
+                let t = builder.get().build(&lights, levels, construction)?;
+                for (name, ms) in builder.passes()? {
+                    if !gpu.contains_key(name) {
+                        gpu_order.push(name);
+                    }
+                    gpu.entry(name).or_default().push(ms);
+                }
                 for (name, ms) in &t.0 {
                     if !steps.contains_key(name) {
                         order.push(name.clone());
@@ -113,7 +169,9 @@ pub fn run(args: &BuildArgs) -> Result<()> {
                 }
                 totals.push(t.total());
             }
-            let Some(grid) = builder.grid() else { continue };
+            let Some(grid) = builder.get().grid() else {
+                continue;
+            };
             let steps_ms: Vec<(String, f64)> = order
                 .iter()
                 .map(|k| (k.clone(), median(steps.get(k).cloned().unwrap_or_default())))
@@ -126,6 +184,10 @@ pub fn run(args: &BuildArgs) -> Result<()> {
                 "steps_ms": steps_ms.iter().map(|(k, v)| (k.clone(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),
                 "step_order": order,
                 "total_ms": median(totals),
+                "gpu_passes_ms": gpu_order
+                    .iter()
+                    .map(|k| ((*k).to_owned(), serde_json::json!(median(gpu.get(k).cloned().unwrap_or_default()))))
+                    .collect::<serde_json::Map<_, _>>(),
                 "peak_bytes_per_light": peak as f64 / lights.positions.len() as f64,
             }));
         }
@@ -133,7 +195,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
     if args.options.json {
         println!(
             "{}",
-            serde_json::json!({ "threads": threads, "runs": rows })
+            serde_json::json!({ "threads": threads, "device": device, "runs": rows })
         );
         return Ok(());
     }
@@ -142,7 +204,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         return Ok(());
     }
     println!(
-        "Lighting grid hierarchy construction, median of {} runs, {threads} threads{}",
+        "Lighting grid hierarchy construction on {device}, median of {} runs, {threads} threads{}",
         args.runs.max(1),
         args.scene
             .as_ref()
@@ -173,6 +235,12 @@ pub fn run(args: &BuildArgs) -> Result<()> {
             "total",
             r["total_ms"].as_f64().unwrap_or(0.0)
         );
+        if let Some(passes) = r["gpu_passes_ms"].as_object().filter(|p| !p.is_empty()) {
+            println!("  GPU passes (timestamps, within level_count and gpu_build):");
+            for (k, v) in passes {
+                println!("    {k:<14} {:>8.3} ms", v.as_f64().unwrap_or(0.0));
+            }
+        }
     }
     Ok(())
 }

@@ -35,7 +35,7 @@ use lgh_core::lighting_grid::{
 };
 use rayon::prelude::*;
 
-use crate::batch::Batch;
+use crate::batch::{Batch, PassTimes};
 use crate::context::{GpuContext, GpuError};
 use crate::pool::Lease;
 
@@ -137,6 +137,9 @@ pub struct GpuGridBuilder<'c> {
     state: Option<GridState>,
     /// Why the last build ran on the CPU, if it did because of the GPU.
     pub fallback: Option<String>,
+    /// The GPU's pass times of the last build (timestamps, where the adapter has them),
+    /// apart from its timings, whose `level_count` and `gpu_build` hold them.
+    pub passes: PassTimes,
 }
 
 /// States kept per context: one per frame building at once.
@@ -158,6 +161,7 @@ impl<'c> GpuGridBuilder<'c> {
             ctx,
             state: Some(state),
             fallback: None,
+            passes: PassTimes::new(),
         }
     }
 
@@ -196,16 +200,17 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
         construction: Construction,
     ) -> Result<BuildTimings, GridError> {
         self.fallback = None;
+        self.passes.clear();
         if construction != Construction::GatherFromS1 {
             let mut t = BuildTimings::default();
             let (lo, hi) = t.time("bounds", || lighting_grid::bounds(lights))?;
             let ctx = self.ctx;
-            let state = self.state();
-            let (lo, hi) = lighting_grid::shifted_bounds(lo, hi, state.shift);
+            let state = self.state.get_or_insert_with(GridState::default);
+            let bounds = lighting_grid::shifted_bounds(lo, hi, state.shift);
             let grid = state
                 .grid
                 .get_or_insert_with(|| GridBuilder::default().into_grid());
-            match build_on(ctx, lights, levels, lo, hi, grid, &mut t) {
+            match build_on(ctx, lights, levels, bounds, grid, &mut t, &mut self.passes) {
                 Ok(()) => {
                     state.on_cpu = false;
                     return Ok(t);
@@ -240,15 +245,16 @@ fn word_starts(count: u32) -> Vec<u32> {
     starts
 }
 
-/// Builds the hierarchy of `lights` in the box `lo`, `hi` on the GPU into `grid`.
+/// Builds the hierarchy of `lights` in the box `(lo, hi)` on the GPU into `grid`, with its
+/// timings in `t` and the GPU's pass times in `passes`.
 fn build_on(
     ctx: &GpuContext,
     lights: &InputLights,
     levels: LevelCount,
-    lo: Vec3,
-    hi: Vec3,
+    (lo, hi): (Vec3, Vec3),
     grid: &mut LightingGrid,
     t: &mut BuildTimings,
+    passes: &mut PassTimes,
 ) -> Result<(), GpuError> {
     let n = lights.positions.len();
     let top = GridGeometry::new(lo, hi, MAX_LEVELS);
@@ -318,9 +324,7 @@ fn build_on(
     let misc_words: &[u32] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
     let count_at = |k: u32| misc_words.get(1 + k as usize).copied().unwrap_or(0) as usize;
     let imax = f32::from_bits(misc_words.first().copied().unwrap_or(0));
-    for &(name, ms) in &gpu {
-        t.push(name, ms);
-    }
+    passes.extend(gpu);
     let l_max = match levels {
         LevelCount::Fixed(l) => l.clamp(1, MAX_LEVELS),
         LevelCount::Auto => lighting_grid::level_rule(n, lo, hi, |l| count_at(l - 1)),
@@ -453,8 +457,11 @@ fn build_on(
     )?;
     batch.read(records.buffer(), records.bytes())?;
     let (reads, gpu) = batch.finish()?;
-    for &(name, ms) in &gpu {
-        t.push(name, ms);
+    for (name, ms) in gpu {
+        match passes.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, sum)) => *sum += ms,
+            None => passes.push((name, ms)),
+        }
     }
     t.push("gpu_build", start.elapsed().as_secs_f64() * 1e3);
     let start = Instant::now();
