@@ -57,14 +57,14 @@ pub struct BuildArgs {
 /// The builder of one variant: the CPU's, or the GPU's (which also gives pass times).
 enum Builder<'c> {
     Cpu(GridBuilder),
-    Gpu(GpuGridBuilder<'c>),
+    Gpu(Box<GpuGridBuilder<'c>>),
 }
 
 impl Builder<'_> {
     fn get(&mut self) -> &mut dyn HierarchyBuilder {
         match self {
             Self::Cpu(b) => b,
-            Self::Gpu(b) => b,
+            Self::Gpu(b) => b.as_mut(),
         }
     }
 
@@ -141,7 +141,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
             // One builder across runs, as a renderer keeps it across frames; the first (cold)
             // run is not timed, and gives the peak working memory.
             let mut builder = match ctx {
-                Some(c) => Builder::Gpu(GpuGridBuilder::new(c)),
+                Some(c) => Builder::Gpu(Box::new(GpuGridBuilder::new(c))),
                 None => Builder::Cpu(GridBuilder::default()),
             };
             let base = crate::sysmem::reset_peak();
