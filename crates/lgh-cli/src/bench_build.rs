@@ -56,14 +56,14 @@ pub struct BuildArgs {
 
 /// The builder of one variant: the CPU's, or the GPU's (which also gives pass times).
 enum Builder<'c> {
-    Cpu(GridBuilder),
+    Cpu(Box<GridBuilder>),
     Gpu(Box<GpuGridBuilder<'c>>),
 }
 
 impl Builder<'_> {
     fn get(&mut self) -> &mut dyn HierarchyBuilder {
         match self {
-            Self::Cpu(b) => b,
+            Self::Cpu(b) => b.as_mut(),
             Self::Gpu(b) => b.as_mut(),
         }
     }
@@ -142,7 +142,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
             // run is not timed, and gives the peak working memory.
             let mut builder = match ctx {
                 Some(c) => Builder::Gpu(Box::new(GpuGridBuilder::new(c))),
-                None => Builder::Cpu(GridBuilder::default()),
+                None => Builder::Cpu(Box::default()),
             };
             let base = crate::sysmem::reset_peak();
             builder.get().build(&lights, levels, construction)?;
