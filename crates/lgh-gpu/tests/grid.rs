@@ -186,3 +186,63 @@ fn gpu_hierarchy_is_the_same_from_run_to_run() {
     let b = gpu(ctx, &lights, LevelCount::Auto, None);
     assert_eq!(a, b);
 }
+
+/// The S_1 representatives drawn on the GPU with the build are the CPU's draw
+/// (`s1_representatives`, same seed): the same hash, the same order of the lights. A slot
+/// may differ where a weight rounds differently (a light's offset an ulp off, a fused
+/// multiply-add in the luminance): at least 99% of the slots are equal, and every slot is
+/// one of the input lights exactly where the CPU's is.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn gpu_representatives_are_the_cpu_draw() {
+    use lgh_core::lighting_grid::representative::{NONE, s1_representatives};
+    let ctx = GpuContext::shared().expect("an adapter");
+    let cases = [
+        ("surfaces", surfaces(20_000, 3), 7),
+        (
+            "box with dark lights",
+            in_box(
+                6000,
+                12,
+                Vec3::new(3.0, 1.0, 2.0),
+                Vec3::new(-5.0, 1.0, 0.0),
+            ),
+            1234,
+        ),
+    ];
+    for (what, lights, seed) in &cases {
+        let mut b = GpuGridBuilder::new(ctx);
+        HierarchyBuilder::draw_representatives(&mut b, Some(*seed));
+        HierarchyBuilder::build(
+            &mut b,
+            &lights.input(),
+            LevelCount::Auto,
+            Construction::Restrict,
+        )
+        .expect("gpu build");
+        assert_eq!(b.fallback, None);
+        let gpu = HierarchyBuilder::representatives(&b)
+            .expect("drawn on the GPU")
+            .to_vec();
+        let grid = cpu(lights, LevelCount::Auto, None);
+        let want = s1_representatives(&grid, &lights.input(), *seed, |s| *s);
+        assert_eq!(gpu.len(), want.len(), "{what}: S_1 lights");
+        let (mut same, mut all) = (0, 0);
+        for (g, c) in gpu.iter().zip(&want) {
+            for (a, b) in g.iter().zip(c) {
+                all += 1;
+                same += usize::from(a == b);
+                assert_eq!(*a == NONE, *b == NONE, "{what}: an empty slot differs");
+                assert!(*a == NONE || (*a as usize) < lights.p.len());
+            }
+        }
+        assert!(
+            same as f64 >= 0.99 * all as f64,
+            "{what}: {same} of {all} slots equal"
+        );
+        eprintln!("{what}: {same} of {all} slots equal");
+    }
+}

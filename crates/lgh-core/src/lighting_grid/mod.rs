@@ -403,6 +403,20 @@ pub trait HierarchyBuilder: Send {
 
     /// The last hierarchy built.
     fn grid(&self) -> Option<&LightingGrid>;
+
+    /// Asks the next builds to draw the S_1 lights' representatives too, with `seed`
+    /// (`None`: not). A builder that does not draw them (the CPU's: the caller draws them
+    /// with [`representative::s1_representatives`]) ignores it.
+    fn draw_representatives(&mut self, seed: Option<u64>) {
+        let _ = seed;
+    }
+
+    /// The S_1 lights' representatives of the last build, in grid order, drawn as
+    /// [`representative::s1_representatives`] draws them with the seed given to
+    /// [`HierarchyBuilder::draw_representatives`]; `None` if this build did not draw them.
+    fn representatives(&self) -> Option<&[[u32; representative::SLOTS]]> {
+        None
+    }
 }
 
 impl HierarchyBuilder for GridBuilder {
@@ -463,7 +477,7 @@ pub fn level_rule(n: usize, lo: Vec3, hi: Vec3, mut count: impl FnMut(u32) -> us
         return 1;
     }
     let fits = |len: usize| 2 * len < n;
-    let guess = ((1.0 + (n as f64 / 8.0).max(1.0).log(4.0).floor()) as u32).clamp(1, MAX_LEVELS);
+    let guess = level_guess(n);
     let mut l = guess;
     if guess == 1 || fits(count(guess)) {
         while l < MAX_LEVELS && fits(count(l + 1)) {
@@ -478,6 +492,14 @@ pub fn level_rule(n: usize, lo: Vec3, hi: Vec3, mut count: impl FnMut(u32) -> us
         }
     }
     l
+}
+
+/// Where [`level_rule`]'s walk starts for `n` lights: for lights on surfaces |S_1| grows
+/// about 4x per level, so l_max = 1 + log4(n / 8). The walk then usually counts this level,
+/// the next and sometimes one more or one less.
+#[must_use]
+pub fn level_guess(n: usize) -> u32 {
+    ((1.0 + (n as f64 / 8.0).max(1.0).log(4.0).floor()) as u32).clamp(1, MAX_LEVELS)
 }
 
 /// Validates the input and returns its bounds (parallel reduction; min and max are exact, so

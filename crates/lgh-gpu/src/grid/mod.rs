@@ -29,6 +29,7 @@ use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
 
 use glam::{UVec3, Vec3};
+use lgh_core::lighting_grid::representative::SLOTS;
 use lgh_core::lighting_grid::{
     self, BuildTimings, Construction, GridBuilder, GridError, GridGeometry, HierarchyBuilder,
     InputLights, LevelCount, LightingGrid, MAX_LEVELS,
@@ -39,6 +40,9 @@ use crate::batch::{Batch, PassTimes};
 use crate::context::{GpuContext, GpuError};
 use crate::pool::Lease;
 
+mod draw;
+mod marks;
+
 /// Floats per light in the uploaded lights: position, intensity, normal.
 const LIGHT_FLOATS: usize = 9;
 /// Words per grid light read back (vertex and mass, position, intensity, normal; the
@@ -48,6 +52,10 @@ const RECORD_WORDS: usize = 16;
 const ACC_WORDS: u64 = 39;
 /// Floats per vertex of the sums of every level (13 used).
 const SUM_FLOATS: u64 = 16;
+
+/// The invocations of one dispatch at most (65,535 workgroups of 64); the kernels loop over
+/// their items with the dispatch's stride.
+const MAX_INVOCATIONS: usize = 64 * 65_535;
 
 /// The parameters of one dispatch (`GridParams` in `shaders/grid/common.wgsl`).
 #[repr(C)]
@@ -63,7 +71,10 @@ struct GridParams {
     vert0: u32,
     imax: f32,
     inv_imax: f32,
-    pad: [u32; 4],
+    step: u32,
+    seed_lo: u32,
+    seed_hi: u32,
+    pad: u32,
 }
 
 /// The WGSL sources of the build's kernels, by name.
@@ -105,6 +116,22 @@ pub fn sources() -> Vec<(&'static str, String)> {
             "grid emit",
             with(&[include_str!("../shaders/grid/emit.wgsl")]),
         ),
+        (
+            "grid cells",
+            with(&[include_str!("../shaders/grid/cells.wgsl")]),
+        ),
+        (
+            "grid cell sort",
+            with(&[include_str!("../shaders/grid/cell_sort.wgsl")]),
+        ),
+        (
+            "grid s1 keep",
+            with(&[include_str!("../shaders/grid/s1_keep.wgsl")]),
+        ),
+        (
+            "grid draw",
+            with(&[include_str!("../shaders/grid/draw.wgsl")]),
+        ),
     ]
 }
 
@@ -128,6 +155,11 @@ pub struct GridState {
     /// Whether the last build was the CPU's.
     on_cpu: bool,
     shift: Option<Vec3>,
+    /// The seed of the representatives' draw, if the builds draw them.
+    seed: Option<u64>,
+    /// The S_1 lights' representatives of the last build (valid with `drawn`).
+    reps: Vec<[u32; SLOTS]>,
+    drawn: bool,
 }
 
 /// Builds hierarchies on the GPU of `ctx` ([`HierarchyBuilder`]); the working memory comes
@@ -206,11 +238,12 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
             let (lo, hi) = t.time("bounds", || lighting_grid::bounds(lights))?;
             let ctx = self.ctx;
             let state = self.state.get_or_insert_with(GridState::default);
-            let bounds = lighting_grid::shifted_bounds(lo, hi, state.shift);
-            let grid = state
-                .grid
-                .get_or_insert_with(|| GridBuilder::default().into_grid());
-            match build_on(ctx, lights, levels, bounds, grid, &mut t, &mut self.passes) {
+            let request = Request {
+                levels,
+                bounds: lighting_grid::shifted_bounds(lo, hi, state.shift),
+                seed: state.seed,
+            };
+            match build_on(ctx, lights, &request, state, &mut t, &mut self.passes) {
                 Ok(()) => {
                     state.on_cpu = false;
                     return Ok(t);
@@ -223,6 +256,15 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
         state.cpu.build(lights, levels, construction)
     }
 
+    fn draw_representatives(&mut self, seed: Option<u64>) {
+        self.state().seed = seed;
+    }
+
+    fn representatives(&self) -> Option<&[[u32; SLOTS]]> {
+        let s = self.state.as_ref()?;
+        (!s.on_cpu && s.drawn).then_some(&s.reps[..])
+    }
+
     fn grid(&self) -> Option<&LightingGrid> {
         let s = self.state.as_ref()?;
         if s.on_cpu {
@@ -233,102 +275,78 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
     }
 }
 
-/// The first word of each resolution's bit set, for `count` resolutions (count + 1 entries).
-fn word_starts(count: u32) -> Vec<u32> {
-    let mut starts = vec![0u32];
-    let mut at = 0u64;
-    for k in 0..count {
-        let side = (1u64 << k) + 1;
-        at += (side * side * side).div_ceil(32);
-        starts.push(at as u32);
-    }
-    starts
+/// What a build is asked for.
+struct Request {
+    levels: LevelCount,
+    /// The box the grid is fitted to.
+    bounds: (Vec3, Vec3),
+    /// The seed of the representatives' draw, if they are to be drawn.
+    seed: Option<u64>,
 }
 
-/// Builds the hierarchy of `lights` in the box `(lo, hi)` on the GPU into `grid`, with its
-/// timings in `t` and the GPU's pass times in `passes`.
+/// Builds the hierarchy of `lights` on the GPU into `state` (its grid, and the S_1
+/// representatives where asked), with its timings in `t` and the GPU's pass times in
+/// `passes`.
 fn build_on(
     ctx: &GpuContext,
     lights: &InputLights,
-    levels: LevelCount,
-    (lo, hi): (Vec3, Vec3),
-    grid: &mut LightingGrid,
+    request: &Request,
+    state: &mut GridState,
     t: &mut BuildTimings,
     passes: &mut PassTimes,
 ) -> Result<(), GpuError> {
+    let Request {
+        levels,
+        bounds: (lo, hi),
+        seed,
+    } = *request;
+    state.drawn = false;
     let n = lights.positions.len();
     let top = GridGeometry::new(lo, hi, MAX_LEVELS);
     let degenerate = n < 2 || (hi - lo).max_element() <= 0.0;
-    let marks = match levels {
+    let first_marks = match levels {
         LevelCount::Fixed(l) => l.clamp(1, MAX_LEVELS),
         LevelCount::Auto if degenerate => 1,
-        LevelCount::Auto => MAX_LEVELS,
+        LevelCount::Auto => (lighting_grid::level_guess(n) + 2).min(MAX_LEVELS),
     };
     let base = GridParams {
         origin: top.origin.to_array(),
         h_top: top.h_top,
-        count: marks,
         ..GridParams::default()
     };
-    let invocations = |items: usize| items.min(64 * 65_535);
 
-    // Step 1: the lights up, the marks, their numbering and the counts.
+    // Step 1: the lights up, the marks, their numbering and the counts. The level rule's
+    // walk usually stays within two levels of its guess: those are marked first, and all
+    // ten only if the walk reaches the last marked.
     let start = Instant::now();
     let up = upload_lights(ctx, lights)?;
-    let starts = word_starts(marks);
-    let words = starts[marks as usize] as usize;
-    let word_start = ctx.upload("grid word starts", &starts)?;
-    let bits = ctx.output("grid bits", 4 * words as u64)?;
-    let prefix = ctx.output("grid prefix", 4 * words as u64)?;
-    let total = ctx.output("grid total", 16)?;
-    let misc = ctx.output("grid misc", 4 * 16)?;
     t.push("gpu_upload", start.elapsed().as_secs_f64() * 1e3);
     let start = Instant::now();
-    let mut batch = Batch::new(ctx);
-    batch.clear_lease(&bits);
-    batch.clear_lease(&misc);
-    let mark = pipeline(ctx, "grid mark");
-    let params = ctx.uniform(
-        "grid params",
-        &GridParams {
-            n: n as u32,
-            ..base
-        },
-    );
-    let bind = ctx.bind_group(
-        &mark,
-        vec![
-            params.as_entire_binding(),
-            up.binding(),
-            word_start.binding(),
-            bits.binding(),
-            misc.binding(),
-        ],
-    );
-    batch.dispatch("grid_mark", &mark, &bind, invocations(n))?;
-    crate::scan::record(ctx, &mut batch, &bits, &prefix, &total, words, true)?;
-    let counts = pipeline(ctx, "grid counts");
-    let bind = ctx.bind_group(
-        &counts,
-        vec![
-            params.as_entire_binding(),
-            word_start.binding(),
-            prefix.binding(),
-            total.binding(),
-            misc.binding(),
-        ],
-    );
-    batch.dispatch("grid_counts", &counts, &bind, marks as usize)?;
-    batch.read(misc.buffer(), misc.bytes())?;
-    let (reads, gpu) = batch.finish()?;
-    let misc_words: &[u32] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
-    let count_at = |k: u32| misc_words.get(1 + k as usize).copied().unwrap_or(0) as usize;
-    let imax = f32::from_bits(misc_words.first().copied().unwrap_or(0));
-    passes.extend(gpu);
+    let mut m = marks::mark(ctx, &up, &base, n, first_marks, passes)?;
     let l_max = match levels {
         LevelCount::Fixed(l) => l.clamp(1, MAX_LEVELS),
-        LevelCount::Auto => lighting_grid::level_rule(n, lo, hi, |l| count_at(l - 1)),
+        LevelCount::Auto => {
+            // A level not marked counts as not fitting (n: 2n < n is false).
+            let rule = |m: &marks::Marks<'_>| {
+                lighting_grid::level_rule(n, lo, hi, |l| m.count(l - 1).unwrap_or(n))
+            };
+            let mut l = rule(&m);
+            if l == m.resolutions() && l < MAX_LEVELS {
+                m = marks::mark(ctx, &up, &base, n, MAX_LEVELS, passes)?;
+                l = rule(&m);
+            }
+            l
+        }
     };
+    let imax = m.imax;
+    let count_at = |k: u32| m.count(k).unwrap_or(0);
+    let marks::Marks {
+        word_start,
+        bits,
+        prefix,
+        starts,
+        ..
+    } = &m;
     t.push("level_count", start.elapsed().as_secs_f64() * 1e3);
 
     // Step 2: S_1's sums, the coarser levels, the grid lights.
@@ -366,14 +384,8 @@ fn build_on(
                     name: &'static str,
                     kernel: &'static str,
                     p: GridParams,
-                    buffers: Vec<wgpu::BindingResource<'_>>|
-     -> Result<(), GpuError> {
-        let pipe = pipeline(ctx, kernel);
-        let uniform = ctx.uniform("grid params", &p);
-        let mut resources = vec![uniform.as_entire_binding()];
-        resources.extend(buffers);
-        let bind = ctx.bind_group(&pipe, resources);
-        batch.dispatch(name, &pipe, &bind, invocations(p.n as usize))
+                    buffers: Vec<wgpu::BindingResource<'_>>| {
+        record(ctx, batch, name, kernel, &p, buffers)
     };
     dispatch(
         &mut batch,
@@ -455,7 +467,32 @@ fn build_on(
             records.binding(),
         ],
     )?;
+    let drawn = match seed {
+        Some(seed) => Some(draw::record_draw(
+            ctx,
+            &mut batch,
+            &draw::Inputs {
+                base: GridParams {
+                    k: k1,
+                    vert0: vert_start[k1 as usize],
+                    seed_lo: seed as u32,
+                    seed_hi: (seed >> 32) as u32,
+                    ..base
+                },
+                lights: &up,
+                n,
+                s1,
+                keys: &keys,
+                sums: &sums,
+            },
+        )?),
+        None => None,
+    };
     batch.read(records.buffer(), records.bytes())?;
+    if let Some(d) = &drawn {
+        batch.read(d.slots.buffer(), d.slots.bytes())?;
+        batch.read(d.flag.buffer(), d.flag.bytes())?;
+    }
     let (reads, gpu) = batch.finish()?;
     for (name, ms) in gpu {
         match passes.iter_mut().find(|(n, _)| *n == name) {
@@ -467,6 +504,9 @@ fn build_on(
     let start = Instant::now();
     let words: &[u32] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
     let counts: Vec<usize> = (1..=l_max).map(|l| count_at(l_max - l)).collect();
+    let grid = state
+        .grid
+        .get_or_insert_with(|| GridBuilder::default().into_grid());
     unpack(
         GridGeometry::new(lo, hi, l_max),
         &counts,
@@ -474,8 +514,31 @@ fn build_on(
         lights.normals.is_some(),
         grid,
     );
+    if drawn.is_some() && reads.len() == 3 {
+        let kept = grid.level_range(1).len();
+        state.drawn = draw::unpack_draw(&reads[1], &reads[2], kept, &mut state.reps);
+    }
     t.push("unpack", start.elapsed().as_secs_f64() * 1e3);
     Ok(())
+}
+
+/// Records a dispatch of kernel `kernel` (of [`sources`]) under `name`, one invocation per
+/// item of `p.n` up to what one dispatch holds (the kernels loop with its stride), with
+/// `buffers` at bindings 1, 2, ... after the parameters.
+fn record(
+    ctx: &GpuContext,
+    batch: &mut Batch<'_>,
+    name: &'static str,
+    kernel: &'static str,
+    p: &GridParams,
+    buffers: Vec<wgpu::BindingResource<'_>>,
+) -> Result<(), GpuError> {
+    let pipe = pipeline(ctx, kernel);
+    let uniform = ctx.uniform("grid params", p);
+    let mut resources = vec![uniform.as_entire_binding()];
+    resources.extend(buffers);
+    let bind = ctx.bind_group(&pipe, resources);
+    batch.dispatch(name, &pipe, &bind, (p.n as usize).min(MAX_INVOCATIONS))
 }
 
 /// The lights as a storage buffer of [`LIGHT_FLOATS`] floats each (the normal zero where

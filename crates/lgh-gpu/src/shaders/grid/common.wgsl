@@ -21,9 +21,12 @@ struct GridParams {
     // The largest intensity component of the lights, and its reciprocal (0 if none).
     imax: f32,
     inv_imax: f32,
+    // Which step of a kernel with several (cells.wgsl).
+    step: u32,
+    // The frame's seed (the representatives' draw).
+    seed_lo: u32,
+    seed_hi: u32,
     pad0: u32,
-    pad1: u32,
-    pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> P: GridParams;

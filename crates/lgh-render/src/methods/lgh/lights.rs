@@ -244,21 +244,24 @@ impl ShadeLights {
     /// Keeps what the unbiased estimate needs of `grid` (built from `vpls` by restriction or
     /// all-scatter), whose lights [`ShadeLights::add_hierarchy`] added from
     /// index `first` with levels `levels`: the representatives of its S_1 lights (drawn with
-    /// `seed`), the children of its coarser lights and its centroids by vertex.
+    /// `seed`, or `drawn` already where the builder drew them), the children of its coarser
+    /// lights and its centroids by vertex.
     pub(super) fn add_unbiased(
         &mut self,
         grid: &LightingGrid,
         vpls: &Vpls,
         levels: ShadedLevels,
-        seed: u64,
+        (seed, drawn): (u64, Option<&[[u32; SLOTS]]>),
         first: usize,
         tables: bool,
     ) {
         // S_1 only: the draw below a coarser light is made afresh per sample.
         // With tables, the slots' VPL indices too (the GPU reads the VPLs by index).
-        let both = s1_representatives(grid, &vpls.as_input(), seed, |s| {
-            (RepSet::of(s, vpls), tables.then_some(*s))
-        });
+        let make = |s: &[u32; SLOTS]| (RepSet::of(s, vpls), tables.then_some(*s));
+        let both: Vec<_> = match drawn {
+            Some(d) if d.len() == grid.level_range(1).len() => d.par_iter().map(make).collect(),
+            _ => s1_representatives(grid, &vpls.as_input(), seed, make),
+        };
         let (reps, slots): (Vec<RepSet>, Vec<Option<[u32; SLOTS]>>) = both.into_iter().unzip();
         let rows = VertexRows::new(grid);
         let vpl_lights = if levels.lowest == 0 { vpls.len() } else { 0 };

@@ -156,6 +156,9 @@ impl LghFrame {
         let n2 = (n * n) as usize;
         let mut lights = ShadeLights::default();
         let (mut build_ms, mut lighting_ms, mut reps_ms) = (0.0, 0.0, 0.0);
+        // A builder that can draw the S_1 representatives with the build (a GPU's) does.
+        let draw = k > 0 && unbiased && settings.shadow_target == ShadowTarget::Representative;
+        builder.draw_representatives(draw.then_some(seed));
         for group in groups.iter().filter(|g| !g.is_empty()) {
             let input = group.as_input();
             let start = Instant::now();
@@ -175,7 +178,8 @@ impl LghFrame {
                         lowest,
                         alpha: settings.alpha,
                     };
-                    lights.add_unbiased(grid, group, levels, seed, first, tables);
+                    let drawn = builder.representatives();
+                    lights.add_unbiased(grid, group, levels, (seed, drawn), first, tables);
                 } else {
                     lights.add_representatives(
                         grid,
