@@ -10,8 +10,9 @@
 //! CPU's; `lgh` with its lighting loop, shadow-sample selection, unbiased shadow targets and
 //! shadow rays ([`lgh::LGH_GPU`]) followed by the interleaving blur ([`interleave`]) and the
 //! ratio estimator ([`ratio`], [`atrous`]); the direct light of both ([`direct`]); and the
-//! lighting grid hierarchy ([`grid`], built with an integer prefix sum, [`scan`]). The
-//! G-buffer, the VPLs, the representatives and the tile binning run on the CPU.
+//! lighting grid hierarchy with its S_1 lights' representatives ([`grid`], built with an
+//! integer prefix sum, [`scan`]). The G-buffer, the VPLs, the unbiased estimate's other
+//! tables and the tile binning run on the CPU.
 //!
 //! The GPU methods are [`lgh_render::Method`]s like the CPU's: `render_frame` runs them with
 //! the same settings and gives the same `Frame`. Results are deterministic: every pixel sums

@@ -1,4 +1,5 @@
-//! The lighting grid hierarchy built on the GPU (Lin & Yuksel 2019 section 3.1): S_1 by a
+//! The lighting grid hierarchy built on the GPU (Lin & Yuksel 2019 section 3.1), with its
+//! S_1 lights' representatives where asked (`grid/draw.rs`): S_1 by a
 //! trilinear splat of the lights, every coarser level by exact restriction from the one
 //! below (`lgh_core`'s [`Construction::Restrict`], which equals the all-scatter
 //! hierarchy), the number of levels by the paper's rule (section 4.3,
