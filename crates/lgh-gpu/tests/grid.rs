@@ -246,3 +246,30 @@ fn gpu_representatives_are_the_cpu_draw() {
         eprintln!("{what}: {same} of {all} slots equal");
     }
 }
+
+/// The gather construction is not built on the GPU: the builder hands it to the CPU's (the
+/// same hierarchy as the CPU builder's), without representatives, and says nothing failed.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn the_gather_construction_is_built_by_the_cpu() {
+    let ctx = GpuContext::shared().expect("an adapter");
+    let lights = surfaces(3000, 6);
+    let mut b = GpuGridBuilder::new(ctx);
+    HierarchyBuilder::draw_representatives(&mut b, Some(3));
+    HierarchyBuilder::build(
+        &mut b,
+        &lights.input(),
+        LevelCount::Auto,
+        Construction::GatherFromS1,
+    )
+    .expect("build");
+    assert_eq!(b.fallback, None);
+    assert!(HierarchyBuilder::representatives(&b).is_none());
+    let mut c = GridBuilder::default();
+    c.build(&lights.input(), LevelCount::Auto, Construction::GatherFromS1)
+        .expect("cpu build");
+    assert_eq!(HierarchyBuilder::grid(&b), c.grid());
+}
