@@ -269,7 +269,11 @@ fn the_gather_construction_is_built_by_the_cpu() {
     assert_eq!(b.fallback, None);
     assert!(HierarchyBuilder::representatives(&b).is_none());
     let mut c = GridBuilder::default();
-    c.build(&lights.input(), LevelCount::Auto, Construction::GatherFromS1)
-        .expect("cpu build");
+    c.build(
+        &lights.input(),
+        LevelCount::Auto,
+        Construction::GatherFromS1,
+    )
+    .expect("cpu build");
     assert_eq!(HierarchyBuilder::grid(&b), c.grid());
 }

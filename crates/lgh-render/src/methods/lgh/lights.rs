@@ -66,7 +66,8 @@ pub(super) struct ShadeLights {
 /// its centroids by vertex for Lambda_i, the children of its lights for the draw of an S_1
 /// light, and the S_1 lights' representatives (with their VPLs' colours).
 pub(super) struct Hierarchy {
-    /// The representatives of its S_1 lights (by grid index).
+    /// The representatives of its S_1 lights (by grid index); empty in a frame prepared with
+    /// tables (whose loop runs on another backend, reading the tables' slots).
     reps: Vec<RepSet>,
     partition: Partition,
     pub(super) descent: Descent,
@@ -255,14 +256,24 @@ impl ShadeLights {
         first: usize,
         tables: bool,
     ) {
-        // S_1 only: the draw below a coarser light is made afresh per sample.
-        // With tables, the slots' VPL indices too (the GPU reads the VPLs by index).
-        let make = |s: &[u32; SLOTS]| (RepSet::of(s, vpls), tables.then_some(*s));
-        let both: Vec<_> = match drawn {
-            Some(d) if d.len() == grid.level_range(1).len() => d.par_iter().map(make).collect(),
-            _ => s1_representatives(grid, &vpls.as_input(), seed, make),
+        // S_1 only: the draw below a coarser light is made afresh per sample. With tables the
+        // frame is for another backend's loop, which reads the slots' VPL indices (the GPU
+        // reads the VPLs by index); only the CPU's loop reads them as `RepSet`s (576 bytes
+        // an S_1 light), which are then not made.
+        let drawn = drawn.filter(|d| d.len() == grid.level_range(1).len());
+        let input = vpls.as_input();
+        let (reps, slots): (Vec<RepSet>, Vec<[u32; SLOTS]>) = match (tables, drawn) {
+            (true, Some(d)) => (Vec::new(), d.to_vec()),
+            (true, None) => (Vec::new(), s1_representatives(grid, &input, seed, |s| *s)),
+            (false, Some(d)) => (
+                d.par_iter().map(|s| RepSet::of(s, vpls)).collect(),
+                Vec::new(),
+            ),
+            (false, None) => (
+                s1_representatives(grid, &input, seed, |s| RepSet::of(s, vpls)),
+                Vec::new(),
+            ),
         };
-        let (reps, slots): (Vec<RepSet>, Vec<Option<[u32; SLOTS]>>) = both.into_iter().unzip();
         let rows = VertexRows::new(grid);
         let vpl_lights = if levels.lowest == 0 { vpls.len() } else { 0 };
         self.hierarchies.push(Hierarchy {
@@ -271,8 +282,7 @@ impl ShadeLights {
             descent: Descent::new(VertexLookup::new(grid, &rows)),
             first,
             grid_base: first + vpl_lights,
-            tables: tables
-                .then(|| GridTables::new(grid, levels, slots.into_iter().flatten(), vpls)),
+            tables: tables.then(|| GridTables::new(grid, levels, slots.into_iter(), vpls)),
         });
     }
 
@@ -416,8 +426,10 @@ impl ShadeLights {
         // positions and normals and three of colours each.
         let mut touch = 0.0;
         for p in batch.iter() {
-            if let Some(u) = p.node {
-                let reps = &self.hierarchies[p.hierarchy].reps[u];
+            if let Some(reps) = p
+                .node
+                .and_then(|u| self.hierarchies[p.hierarchy].reps.get(u))
+            {
                 for a in 0..3 {
                     touch += reps.position[a][0] + reps.normal[a][0] + reps.colour[a][0];
                 }
@@ -437,7 +449,11 @@ impl ShadeLights {
                 }
                 Some(u) => {
                     let mut rng = p.rng;
-                    let reps = &self.hierarchies[p.hierarchy].reps[u];
+                    // (A frame prepared with tables has no CPU copies; its loop runs
+                    // elsewhere.)
+                    let Some(reps) = self.hierarchies[p.hierarchy].reps.get(u) else {
+                        continue;
+                    };
                     let weights = reps.weights(xp, nx, eps2);
                     let total: f32 = weights.iter().sum();
                     if total <= 0.0 {

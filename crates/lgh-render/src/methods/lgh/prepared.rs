@@ -84,7 +84,8 @@ impl LghFrame {
     /// roles, what the shadow targets need (representatives, or the unbiased estimate's
     /// walks), and the lights binned into screen tiles. With `tables`, each hierarchy's
     /// lookup tables are kept for [`LghFrame::tables`] (a backend that runs the loop
-    /// elsewhere).
+    /// elsewhere), and the CPU's copies of the representatives are not made: such a frame is
+    /// not for [`LghFrame::shade`].
     ///
     /// # Errors
     /// The VPLs cannot form a hierarchy (non-finite values).
