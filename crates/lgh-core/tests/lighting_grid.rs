@@ -2,11 +2,8 @@
 
 use glam::{DVec3, Vec3};
 use lgh_core::lighting_grid::reference::build_reference;
-use lgh_core::lighting_grid::synthetic::lights_on_surfaces;
-use lgh_core::lighting_grid::{
-    Construction, GridError, InputLights, LevelCount, LightingGrid, MAX_LEVELS,
-};
-use lgh_core::rng::Rng;
+use lgh_core::lighting_grid::synthetic::{SyntheticLights, lights_in_box, lights_on_surfaces};
+use lgh_core::lighting_grid::{Construction, GridError, LevelCount, LightingGrid, MAX_LEVELS};
 use proptest::prelude::*;
 
 const ALL: [Construction; 3] = [
@@ -15,44 +12,14 @@ const ALL: [Construction; 3] = [
     Construction::Restrict,
 ];
 
-struct Lights {
-    p: Vec<Vec3>,
-    i: Vec<Vec3>,
-    n: Vec<Vec3>,
-}
-
-impl Lights {
-    fn input(&self) -> InputLights<'_> {
-        InputLights {
-            positions: &self.p,
-            intensity: &self.i,
-            normals: Some(&self.n),
-        }
-    }
-}
+type Lights = SyntheticLights;
 
 fn synthetic(n: usize, seed: u64) -> Lights {
-    let s = lights_on_surfaces(n, seed);
-    Lights {
-        p: s.positions,
-        i: s.intensity,
-        n: s.normals,
-    }
+    lights_on_surfaces(n, seed)
 }
 
 fn random_box(n: usize, seed: u64, scale: Vec3, offset: Vec3) -> Lights {
-    let mut r = Rng::new(&[seed, 99]);
-    let mut l = Lights {
-        p: vec![],
-        i: vec![],
-        n: vec![],
-    };
-    for _ in 0..n {
-        l.p.push(offset + scale * Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()));
-        l.i.push(Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 3.0);
-        l.n.push(Vec3::new(r.next_f32() - 0.5, 1.0, r.next_f32() - 0.5).normalize());
-    }
-    l
+    lights_in_box(n, seed, scale, offset)
 }
 
 fn build(l: &Lights, levels: LevelCount, c: Construction) -> LightingGrid {
@@ -68,8 +35,8 @@ fn sum_d(v: impl Iterator<Item = Vec3>) -> DVec3 {
 /// lies within one cell of its vertex, up to the f32 rounding of its coordinates (a few ulps
 /// of their magnitude: with one light the grid is a tiny box far from the origin).
 fn check_invariants(l: &Lights, g: &LightingGrid) {
-    let total = sum_d(l.i.iter().copied());
-    let centroid = sum_d(l.p.iter().copied()) / l.p.len() as f64;
+    let total = sum_d(l.intensity.iter().copied());
+    let centroid = sum_d(l.positions.iter().copied()) / l.positions.len() as f64;
     let scale = g.geometry.h_top as f64;
     for level in 1..=g.l_max() {
         let r = g.level_range(level);
@@ -78,7 +45,7 @@ fn check_invariants(l: &Lights, g: &LightingGrid) {
         assert!(rel < 1e-5, "level {level}: intensity {s} vs {total}");
         // Zero-intensity vertices are compacted away, so check the centroid only when all
         // inputs have intensity (then nothing is removed).
-        if l.i.iter().all(|c| c.max_element() > 0.0) {
+        if l.intensity.iter().all(|c| c.max_element() > 0.0) {
             let w: f64 = g.mass[r.clone()].iter().map(|&m| m as f64).sum();
             let c = r
                 .clone()
@@ -86,7 +53,7 @@ fn check_invariants(l: &Lights, g: &LightingGrid) {
                 .sum::<DVec3>()
                 / w;
             assert!(
-                (w - l.p.len() as f64).abs() < 1e-3 * l.p.len() as f64,
+                (w - l.positions.len() as f64).abs() < 1e-3 * l.positions.len() as f64,
                 "level {level}: mass {w}"
             );
             assert!(
@@ -163,7 +130,7 @@ fn gather_and_scatter_agree_on_s1_and_are_close_above() {
     assert_eq!(g.position[r1.clone()], s.position[r1.clone()]);
     assert_eq!(g.intensity[r1.clone()], s.intensity[r1.clone()]);
     assert_eq!(g.deviation[r1.clone()], s.deviation[r1]);
-    let total = sum_d(l.i.iter().copied()).element_sum();
+    let total = sum_d(l.intensity.iter().copied()).element_sum();
     for level in 2..=g.l_max() {
         let map = |grid: &LightingGrid| {
             grid.level_range(level)
@@ -307,18 +274,18 @@ fn a_light_holding_a_sliver_matches_the_reference() {
 fn edge_cases() {
     // One light: one level, its S1 lights sum to it.
     let one = Lights {
-        p: vec![Vec3::new(1.0, 2.0, 3.0)],
-        i: vec![Vec3::ONE],
-        n: vec![Vec3::Y],
+        positions: vec![Vec3::new(1.0, 2.0, 3.0)],
+        intensity: vec![Vec3::ONE],
+        normals: vec![Vec3::Y],
     };
     let g = build(&one, LevelCount::Auto, Construction::GatherFromS1);
     assert_eq!(g.l_max(), 1);
     check_invariants(&one, &g);
     // All lights at one point (zero-size box), with several levels forced.
     let point = Lights {
-        p: vec![Vec3::splat(-7.0); 100],
-        i: vec![Vec3::new(1.0, 0.5, 0.25); 100],
-        n: vec![Vec3::Z; 100],
+        positions: vec![Vec3::splat(-7.0); 100],
+        intensity: vec![Vec3::new(1.0, 0.5, 0.25); 100],
+        normals: vec![Vec3::Z; 100],
     };
     for levels in [LevelCount::Auto, LevelCount::Fixed(5)] {
         let g = build(&point, levels, Construction::GatherFromS1);
@@ -337,31 +304,31 @@ fn edge_cases() {
     // Zero-intensity lights keep their share of nothing: sums still hold.
     let mut zero = random_box(500, 9, Vec3::ONE, Vec3::ZERO);
     for k in (0..500).step_by(3) {
-        zero.i[k] = Vec3::ZERO;
+        zero.intensity[k] = Vec3::ZERO;
     }
     for c in ALL {
         check_invariants(&zero, &build(&zero, LevelCount::Auto, c));
     }
     let all_zero = Lights {
-        p: vec![Vec3::ZERO, Vec3::ONE],
-        i: vec![Vec3::ZERO; 2],
-        n: vec![Vec3::Y; 2],
+        positions: vec![Vec3::ZERO, Vec3::ONE],
+        intensity: vec![Vec3::ZERO; 2],
+        normals: vec![Vec3::Y; 2],
     };
     assert!(build(&all_zero, LevelCount::Auto, Construction::GatherFromS1).is_empty());
     // Non-finite positions or intensities and negative intensities are clear errors.
     let mut bad = random_box(10, 1, Vec3::ONE, Vec3::ZERO);
-    bad.p[4].y = f32::NAN;
+    bad.positions[4].y = f32::NAN;
     let err = LightingGrid::build(&bad.input(), LevelCount::Auto, Construction::GatherFromS1)
         .unwrap_err();
     assert_eq!(err, GridError::InvalidLight { index: 4 });
     assert!(err.to_string().contains("light 4"));
-    bad.p[4].y = 0.0;
-    bad.i[7].x = -1.0;
+    bad.positions[4].y = 0.0;
+    bad.intensity[7].x = -1.0;
     assert!(LightingGrid::build(&bad.input(), LevelCount::Auto, Construction::ScatterAll).is_err());
     let empty = Lights {
-        p: vec![],
-        i: vec![],
-        n: vec![],
+        positions: vec![],
+        intensity: vec![],
+        normals: vec![],
     };
     assert_eq!(
         LightingGrid::build(&empty.input(), LevelCount::Auto, Construction::ScatterAll)

@@ -3,54 +3,25 @@
 //! in a box, on a plane, far from the origin, one light; and the same from run to run.
 
 use glam::Vec3;
-use lgh_core::lighting_grid::synthetic::lights_on_surfaces;
+use lgh_core::lighting_grid::synthetic::{SyntheticLights, lights_in_box, lights_on_surfaces};
 use lgh_core::lighting_grid::{
-    Construction, GridBuilder, HierarchyBuilder, InputLights, LevelCount, LightingGrid,
+    Construction, GridBuilder, HierarchyBuilder, LevelCount, LightingGrid,
 };
-use lgh_core::rng::Rng;
 use lgh_gpu::GpuContext;
 use lgh_gpu::grid::GpuGridBuilder;
 
-struct Lights {
-    p: Vec<Vec3>,
-    i: Vec<Vec3>,
-    n: Vec<Vec3>,
-}
-
-impl Lights {
-    fn input(&self) -> InputLights<'_> {
-        InputLights {
-            positions: &self.p,
-            intensity: &self.i,
-            normals: Some(&self.n),
-        }
-    }
-}
+type Lights = SyntheticLights;
 
 fn surfaces(n: usize, seed: u64) -> Lights {
-    let s = lights_on_surfaces(n, seed);
-    Lights {
-        p: s.positions,
-        i: s.intensity,
-        n: s.normals,
-    }
+    lights_on_surfaces(n, seed)
 }
 
 /// Lights in the box `offset + scale x [0, 1)^3` (a plane where a scale is 0), one in ten
 /// dark.
 fn in_box(n: usize, seed: u64, scale: Vec3, offset: Vec3) -> Lights {
-    let mut r = Rng::new(&[seed, 17]);
-    let mut l = Lights {
-        p: vec![],
-        i: vec![],
-        n: vec![],
-    };
-    for k in 0..n {
-        l.p.push(offset + scale * Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()));
-        let dark = k % 10 == 3;
-        let c = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 5.0;
-        l.i.push(if dark { Vec3::ZERO } else { c });
-        l.n.push(Vec3::new(r.next_f32() - 0.5, 1.0, r.next_f32() - 0.5).normalize());
+    let mut l = lights_in_box(n, seed, scale, offset);
+    for c in l.intensity.iter_mut().skip(3).step_by(10) {
+        *c = Vec3::ZERO;
     }
     l
 }
@@ -236,7 +207,7 @@ fn gpu_representatives_are_the_cpu_draw() {
                 all += 1;
                 same += usize::from(a == b);
                 assert_eq!(*a == NONE, *b == NONE, "{what}: an empty slot differs");
-                assert!(*a == NONE || (*a as usize) < lights.p.len());
+                assert!(*a == NONE || (*a as usize) < lights.positions.len());
             }
         }
         assert!(

@@ -7,6 +7,7 @@
 
 use glam::Vec3;
 
+use super::InputLights;
 use crate::rng::Rng;
 
 /// Positions, normals and intensities of a synthetic light set.
@@ -18,6 +19,36 @@ pub struct SyntheticLights {
     pub normals: Vec<Vec3>,
     /// RGB intensities.
     pub intensity: Vec<Vec3>,
+}
+
+impl SyntheticLights {
+    /// The set as a hierarchy's input lights (oriented).
+    #[must_use]
+    pub fn input(&self) -> InputLights<'_> {
+        InputLights {
+            positions: &self.positions,
+            intensity: &self.intensity,
+            normals: Some(&self.normals),
+        }
+    }
+}
+
+/// `n` lights without structure, from `seed`: uniform in the box `offset + scale x [0, 1)^3`
+/// (a plane where a component of `scale` is 0), RGB intensities uniform in [0, 3) per
+/// channel, normals within 45 degrees of +y.
+#[must_use]
+pub fn lights_in_box(n: usize, seed: u64, scale: Vec3, offset: Vec3) -> SyntheticLights {
+    let mut r = Rng::new(&[seed, 99]);
+    let mut out = SyntheticLights::default();
+    for _ in 0..n {
+        let p = offset + scale * Vec3::new(r.next_f32(), r.next_f32(), r.next_f32());
+        out.positions.push(p);
+        let c = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 3.0;
+        out.intensity.push(c);
+        let nrm = Vec3::new(r.next_f32() - 0.5, 1.0, r.next_f32() - 0.5).normalize();
+        out.normals.push(nrm);
+    }
+    out
 }
 
 /// `n` lights on the surfaces of a room with boxes (see the module docs), from `seed`.
