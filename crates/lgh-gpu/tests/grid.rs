@@ -248,3 +248,42 @@ fn the_gather_construction_is_built_by_the_cpu() {
     .expect("cpu build");
     assert_eq!(HierarchyBuilder::grid(&b), c.grid());
 }
+
+/// The GPU's exclusive prefix sum equals the CPU's, of values and of population counts, over
+/// sizes that need one block, several, and more block totals than one pass of the second
+/// step holds (over 256 blocks of 1024).
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn gpu_scan_equals_the_cpu_prefix_sum() {
+    let ctx = GpuContext::shared().expect("an adapter");
+    let mut rng = lgh_core::rng::Rng::new(&[5, 5]);
+    for n in [1usize, 1000, 5000, 300_000] {
+        let values: Vec<u32> = (0..n).map(|_| rng.next_u32()).collect();
+        for popcount in [false, true] {
+            let small: Vec<u32> = if popcount {
+                values.clone()
+            } else {
+                values.iter().map(|v| v % 1000).collect()
+            };
+            let src = ctx.upload("test scan src", &small).expect("upload");
+            let dst = ctx.output("test scan dst", 4 * n as u64).expect("lease");
+            let total = ctx.output("test scan total", 16).expect("lease");
+            let mut batch = lgh_gpu::Batch::new(ctx);
+            lgh_gpu::scan::record(ctx, &mut batch, &src, &dst, &total, n, popcount).expect("scan");
+            batch.read(dst.buffer(), dst.bytes()).expect("read");
+            batch.read(total.buffer(), 16).expect("read");
+            let (reads, _) = batch.finish().expect("finish");
+            let got: &[u32] = bytemuck::cast_slice(&reads[0]);
+            let got_total: &[u32] = bytemuck::cast_slice(&reads[1]);
+            let mut sum = 0u32;
+            for (k, v) in small.iter().enumerate() {
+                assert_eq!(got[k], sum, "n {n}, popcount {popcount}: element {k}");
+                sum = sum.wrapping_add(if popcount { v.count_ones() } else { *v });
+            }
+            assert_eq!(got_total[0], sum, "n {n}: total");
+        }
+    }
+}

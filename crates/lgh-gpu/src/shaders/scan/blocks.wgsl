@@ -4,8 +4,6 @@
 @group(0) @binding(1) var<storage, read_write> blocks: array<u32>;
 @group(0) @binding(2) var<storage, read_write> total: array<u32>;
 
-var<workgroup> part: array<u32, 256>;
-
 @compute @workgroup_size(256)
 fn main(@builtin(local_invocation_id) lid: vec3<u32>) {
     var carry = 0u;
@@ -18,15 +16,7 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>) {
         }
         part[lid.x] = x;
         workgroupBarrier();
-        for (var off = 1u; off < 256u; off <<= 1u) {
-            var t = 0u;
-            if (lid.x >= off) {
-                t = part[lid.x - off];
-            }
-            workgroupBarrier();
-            part[lid.x] += t;
-            workgroupBarrier();
-        }
+        scan_part(lid.x);
         if (i < P.n) {
             blocks[i] = carry + part[lid.x] - x;
         }

@@ -6,8 +6,6 @@
 @group(0) @binding(2) var<storage, read_write> dst: array<u32>;
 @group(0) @binding(3) var<storage, read_write> blocks: array<u32>;
 
-var<workgroup> part: array<u32, 256>;
-
 @compute @workgroup_size(256)
 fn main(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wid: vec3<u32>) {
     let base = wid.x * 1024u + lid.x * 4u;
@@ -26,15 +24,7 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wid
     }
     part[lid.x] = sum;
     workgroupBarrier();
-    for (var off = 1u; off < 256u; off <<= 1u) {
-        var t = 0u;
-        if (lid.x >= off) {
-            t = part[lid.x - off];
-        }
-        workgroupBarrier();
-        part[lid.x] += t;
-        workgroupBarrier();
-    }
+    scan_part(lid.x);
     let start = part[lid.x] - sum;
     for (var j = 0u; j < 4u; j++) {
         if (base + j < P.n) {
