@@ -149,13 +149,40 @@ impl GpuContext {
         label: &'static str,
         data: &[T],
     ) -> Result<Lease<'_>, GpuError> {
-        let bytes: &[u8] = bytemuck::cast_slice(data);
-        let lease = self.lease(label, bytes.len() as u64, Self::STORAGE)?;
+        self.upload_parts(label, &[bytemuck::cast_slice(data)])
+    }
+
+    /// A storage buffer (leased) holding the concatenation of `parts`, written straight
+    /// from them into the queue's staging memory: a frame's tables, made of several arrays,
+    /// are not first copied into one.
+    ///
+    /// # Errors
+    /// As [`GpuContext::lease`].
+    pub fn upload_parts(
+        &self,
+        label: &'static str,
+        parts: &[&[u8]],
+    ) -> Result<Lease<'_>, GpuError> {
+        let mut ends = Vec::with_capacity(parts.len());
+        let mut total = 0usize;
+        for part in parts {
+            total += part.len();
+            ends.push(total);
+        }
+        let lease = self.lease(label, total as u64, Self::STORAGE)?;
         self.write_parallel(lease.buffer(), lease.bytes(), |at, out| {
-            let from = bytes.get(at..).unwrap_or_default();
-            let n = from.len().min(out.len());
-            out[..n].copy_from_slice(&from[..n]);
-            out[n..].fill(0);
+            out.fill(0);
+            // The parts that overlap bytes at..at + out.len().
+            let first = ends.partition_point(|&e| e <= at);
+            for (k, part) in parts.iter().enumerate().skip(first) {
+                let start = ends[k] - part.len();
+                if start >= at + out.len() {
+                    break;
+                }
+                let from = at.max(start);
+                let to = (at + out.len()).min(ends[k]);
+                out[from - at..to - at].copy_from_slice(&part[from - start..to - start]);
+            }
         });
         Ok(lease)
     }

@@ -184,8 +184,8 @@ pub(super) fn record_loop<'c>(
     let gbuffer = ctx.gbuffer(g)?;
     let buffers = vec![
         ctx.upload("lights", &packed.lights)?,
-        ctx.upload("light lists", &packed.lists)?,
-        ctx.upload("hierarchy tables", &packed.words)?,
+        ctx.upload_parts("light lists", &packed.list_parts(tables))?,
+        ctx.upload_parts("hierarchy tables", &packed.word_parts(tables))?,
         ctx.upload("representatives", &packed.reps)?,
     ];
     // Every pixel's three words are written by the kernel: no clearing.

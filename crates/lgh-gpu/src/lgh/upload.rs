@@ -6,6 +6,8 @@ use lgh_render::methods::MethodInputs;
 use lgh_render::methods::lgh::tables::LghTables;
 use rayon::prelude::*;
 
+use lgh_core::lighting_grid::representative::SLOTS;
+
 use crate::context::GpuError;
 
 /// Hierarchies the uniform holds (the six normal bins, and room).
@@ -48,21 +50,20 @@ pub(super) struct Params {
     hier: [Hier; MAX_HIERARCHIES],
 }
 
-/// The storage buffers' contents.
+/// The storage buffers' contents, where they are not the frame's tables themselves: the
+/// lists and hierarchy buffers are uploaded from their parts ([`Tables::list_parts`],
+/// [`Tables::word_parts`]) without a concatenated copy.
 pub(super) struct Tables {
     /// Per shaded light: position and reach^2, normal and isotropic share, intensity and
     /// radius, blending floors with level and vertex x.
     pub(super) lights: Vec<[Vec4; 4]>,
-    /// The lists' starts, then their lights, then the pixels in the order the invocations
-    /// take them ([`pixel_order`]), then each pixel's list.
-    pub(super) lists: Vec<u32>,
-    /// Per hierarchy: vertex-row starts of levels 1..=l_max, descent starts, descent
-    /// children as (child, bits of the running sum), and per S_1 light its [`SLOTS`]
-    /// representatives as indices into the hierarchy's VPLs.
-    pub(super) words: Vec<u32>,
+    /// The pixels in the order the invocations take them ([`pixel_order`]).
+    order: Vec<u32>,
+    /// Per hierarchy, its descent children as (child, bits of the running sum).
+    children: Vec<Vec<u32>>,
     /// Per hierarchy, its VPLs: position, normal, flux colour.
     pub(super) reps: Vec<Vec4>,
-    /// Each hierarchy's place in `words` and `reps`.
+    /// Each hierarchy's place in the words and `reps`.
     hier: Vec<Hier>,
 }
 
@@ -90,14 +91,9 @@ impl Tables {
                 ]
             })
             .collect();
-        let mut lists = t.bins.offsets.clone();
-        lists.extend_from_slice(&t.bins.lights);
-        lists.extend(pixel_order(
-            &t.bins.list,
-            t.bins.offsets.len().saturating_sub(1),
-        ));
-        lists.extend_from_slice(&t.bins.list);
-        let (mut words, mut reps, mut hier) = (Vec::new(), Vec::new(), Vec::new());
+        let order = pixel_order(&t.bins.list, t.bins.offsets.len().saturating_sub(1));
+        let (mut words, mut reps, mut hier, mut children) =
+            (0usize, Vec::new(), Vec::new(), Vec::new());
         for h in &t.hierarchies {
             let grid = h.grid;
             if let Some(grid_lights) = lights.get_mut(h.grid_base as usize..) {
@@ -106,20 +102,20 @@ impl Tables {
                     .zip(&grid.vertex_x)
                     .for_each(|(light, &x)| light[3].w = f32::from_bits(x));
             }
-            let rows_base = words.len() as u32;
-            for rows in &grid.rows {
-                words.extend_from_slice(rows);
-            }
-            let starts_base = words.len() as u32;
-            words.extend_from_slice(h.descent_starts);
-            let children_base = words.len() as u32;
-            for &(c, sum) in h.descent_children {
-                words.extend_from_slice(&[c, sum.to_bits()]);
-            }
-            let reps_base = words.len() as u32;
-            for slots in &grid.rep_vpls {
-                words.extend_from_slice(slots);
-            }
+            let rows_base = words as u32;
+            words += grid.rows.iter().map(Vec::len).sum::<usize>();
+            let starts_base = words as u32;
+            words += h.descent_starts.len();
+            let children_base = words as u32;
+            let pairs: Vec<u32> = h
+                .descent_children
+                .par_iter()
+                .flat_map_iter(|&(c, sum)| [c, sum.to_bits()])
+                .collect();
+            words += pairs.len();
+            children.push(pairs);
+            let reps_base = words as u32;
+            words += SLOTS * grid.rep_vpls.len();
             let vpl_base = (reps.len() / 3) as u32;
             reps.par_extend(grid.vpls.par_iter().flat_map_iter(|v| {
                 [
@@ -144,16 +140,42 @@ impl Tables {
                 _pad: [0; 2],
             });
         }
-        if words.len() > u32::MAX as usize / 2 || reps.len() > u32::MAX as usize / 2 {
+        if words > u32::MAX as usize / 2 || reps.len() > u32::MAX as usize / 2 {
             return Err(GpuError::TooLarge("hierarchy tables".into()));
         }
         Ok(Self {
             lights,
-            lists,
-            words,
+            order,
+            children,
             reps,
             hier,
         })
+    }
+
+    /// The lists buffer of the frame whose tables are `t` (these packed from them): the
+    /// lists' starts, then their lights, then the pixels in the order the invocations take
+    /// them, then each pixel's list.
+    pub(super) fn list_parts<'s>(&'s self, t: &'s LghTables) -> Vec<&'s [u8]> {
+        vec![
+            bytemuck::cast_slice(&t.bins.offsets),
+            bytemuck::cast_slice(&t.bins.lights),
+            bytemuck::cast_slice(&self.order),
+            bytemuck::cast_slice(&t.bins.list),
+        ]
+    }
+
+    /// The hierarchy buffer (words): per hierarchy its vertex-row starts of levels
+    /// 1..=l_max, descent starts, descent children as (child, bits of the running sum),
+    /// and per S_1 light its [`SLOTS`] representatives as indices into the hierarchy's VPLs.
+    pub(super) fn word_parts<'s>(&'s self, t: &'s LghTables) -> Vec<&'s [u8]> {
+        let mut parts: Vec<&[u8]> = Vec::new();
+        for (h, children) in t.hierarchies.iter().zip(&self.children) {
+            parts.extend(h.grid.rows.iter().map(|r| bytemuck::cast_slice(r)));
+            parts.push(bytemuck::cast_slice(h.descent_starts));
+            parts.push(bytemuck::cast_slice(children));
+            parts.push(bytemuck::cast_slice(&h.grid.rep_vpls));
+        }
+        parts
     }
 }
 
