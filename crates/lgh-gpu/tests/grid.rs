@@ -287,3 +287,34 @@ fn gpu_scan_equals_the_cpu_prefix_sum() {
         }
     }
 }
+
+/// Bad lights are refused by the GPU builder as by the CPU's, with the same error, before
+/// any GPU work: a non-finite position, a negative intensity, none at all.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn bad_lights_are_refused_as_on_the_cpu() {
+    use lgh_core::lighting_grid::GridError;
+    let ctx = GpuContext::shared().expect("an adapter");
+    let mut nan = lights_in_box(10, 1, Vec3::ONE, Vec3::ZERO);
+    nan.positions[4].y = f32::NAN;
+    let mut negative = lights_in_box(10, 1, Vec3::ONE, Vec3::ZERO);
+    negative.intensity[7].x = -1.0;
+    let empty = SyntheticLights::default();
+    for (lights, want) in [
+        (&nan, GridError::InvalidLight { index: 4 }),
+        (&negative, GridError::InvalidLight { index: 7 }),
+        (&empty, GridError::Empty),
+    ] {
+        let mut b = GpuGridBuilder::new(ctx);
+        let got = HierarchyBuilder::build(
+            &mut b,
+            &lights.input(),
+            LevelCount::Auto,
+            Construction::Restrict,
+        );
+        assert_eq!(got.err(), Some(want));
+    }
+}
