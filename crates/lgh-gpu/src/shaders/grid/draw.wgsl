@@ -88,6 +88,40 @@ fn weight(i: u32, d: vec3<u32>) -> f32 {
     return corner_weight(locate(p, P.k).f, d) * luminance(c);
 }
 
+// What a walk over the lights of a vertex's 8 cells found: their total weight, the last
+// light with a weight, and the slots filled.
+struct Walk {
+    total: f32,
+    last: u32,
+    filled: u32,
+}
+
+// Walks the lights of vertex v's 8 cells (corner by corner, each cell's by index) with
+// their weights; with `assign`, fills the slots from `out` on: slot (s + o) mod SLOTS takes
+// the first light where the running total exceeds (s + u) / SLOTS of `total`.
+fn walk(v: vec3<u32>, r: u32, assign: bool, total: f32, u: f32, o: u32, out: u32) -> Walk {
+    var running = 0.0;
+    var last = 0xffffffffu;
+    var s = 0u;
+    for (var corner_i = 0u; corner_i < 8u; corner_i++) {
+        let d = corner(corner_i);
+        let run = cell_run(v, d, r);
+        for (var t = 0u; t < run.y; t++) {
+            let i = runs[run.x + t];
+            let w = weight(i, d);
+            if (w > 0.0) {
+                running += w;
+                last = i;
+                while (assign && s < SLOTS && running > (f32(s) + u) * (1.0 / f32(SLOTS)) * total) {
+                    slots[out + (s + o) % SLOTS] = i;
+                    s++;
+                }
+            }
+        }
+    }
+    return Walk(running, last, s);
+}
+
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let r = 1u << P.k;
@@ -97,22 +131,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         }
         let j = numbers[g];
         let v = key_vertex(keys[P.vert0 + g], r);
-        var total = 0.0;
-        var last = 0xffffffffu;
-        for (var corner_i = 0u; corner_i < 8u; corner_i++) {
-            let d = corner(corner_i);
-            let run = cell_run(v, d, r);
-            for (var t = 0u; t < run.y; t++) {
-                let i = runs[run.x + t];
-                let w = weight(i, d);
-                if (w > 0.0) {
-                    total += w;
-                    last = i;
-                }
-            }
-        }
         let out = SLOTS * j;
-        if (last == 0xffffffffu) {
+        let all = walk(v, r, false, 0.0, 0.0, 0u, out);
+        if (all.last == 0xffffffffu) {
             for (var s = 0u; s < SLOTS; s++) {
                 slots[out + s] = 0xffffffffu;
             }
@@ -121,26 +142,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         let bits = hash3(vec2<u32>(P.seed_lo, P.seed_hi), vec2<u32>(1u, 0u), vec2<u32>(j, 0u));
         let u = f32(bits.y >> (32u - U_BITS)) * (1.0 / f32(1u << U_BITS));
         let o = bits.x & (SLOTS - 1u);
-        var s = 0u;
-        var running = 0.0;
-        for (var corner_i = 0u; corner_i < 8u; corner_i++) {
-            let d = corner(corner_i);
-            let run = cell_run(v, d, r);
-            for (var t = 0u; t < run.y; t++) {
-                let i = runs[run.x + t];
-                let w = weight(i, d);
-                if (w > 0.0) {
-                    running += w;
-                    while (s < SLOTS && running > (f32(s) + u) * (1.0 / f32(SLOTS)) * total) {
-                        slots[out + (s + o) % SLOTS] = i;
-                        s++;
-                    }
-                }
-            }
-        }
-        while (s < SLOTS) {
-            slots[out + (s + o) % SLOTS] = last;
-            s++;
+        for (var s = walk(v, r, true, all.total, u, o, out).filled; s < SLOTS; s++) {
+            slots[out + (s + o) % SLOTS] = all.last;
         }
     }
 }
