@@ -318,3 +318,41 @@ fn bad_lights_are_refused_as_on_the_cpu() {
         assert_eq!(got.err(), Some(want));
     }
 }
+
+/// An `lgh` frame's statistics say where its hierarchies were built: on the GPU with the
+/// GPU methods (shadowed, whose build also draws the representatives, and unshadowed), on
+/// the CPU with the CPU method.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn lgh_statistics_say_where_the_hierarchy_was_built() {
+    use lgh_render::methods::lgh::{LGH, LghStats};
+    use lgh_render::{RenderSettings, Silent, World, render_frame};
+    let world = World::new({
+        let mut s = lgh_scene::cornell::cornell_box();
+        s.finish(std::path::Path::new("<built-in cornell>"))
+            .expect("scene");
+        s
+    });
+    let base = RenderSettings {
+        width: 32,
+        height: 18,
+        vpls: 2000,
+        ..RenderSettings::default()
+    };
+    for (method, want) in [
+        (lgh_gpu::lgh::LGH_GPU, "gpu"),
+        (lgh_gpu::lgh::LGH_UNSHADOWED_GPU, "gpu"),
+        (LGH, "cpu"),
+    ] {
+        let s = RenderSettings {
+            method,
+            ..base.clone()
+        };
+        let frame = render_frame(&world, &s, &Silent).expect("frame");
+        let stats = frame.stats::<LghStats>().expect("lgh statistics");
+        assert_eq!(stats.hierarchy_device, want, "{}", method.name());
+    }
+}

@@ -404,6 +404,11 @@ pub trait HierarchyBuilder: Send {
     /// The last hierarchy built.
     fn grid(&self) -> Option<&LightingGrid>;
 
+    /// Where the last hierarchy was built: `"cpu"`, or a backend's name (`"gpu"`).
+    fn device(&self) -> &'static str {
+        "cpu"
+    }
+
     /// Asks the next builds to draw the S_1 lights' representatives too, with `seed`
     /// (`None`: not). A builder that does not draw them (the CPU's: the caller draws them
     /// with [`representative::s1_representatives`]) ignores it.

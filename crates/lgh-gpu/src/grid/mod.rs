@@ -257,6 +257,13 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
         state.cpu.build(lights, levels, construction)
     }
 
+    fn device(&self) -> &'static str {
+        match &self.state {
+            Some(s) if !s.on_cpu => "gpu",
+            _ => "cpu",
+        }
+    }
+
     fn draw_representatives(&mut self, seed: Option<u64>) {
         self.state().seed = seed;
     }

@@ -127,6 +127,10 @@ pub struct LghStats {
     pub shadow_samples: u32,
     /// n of the n x n interleaving used.
     pub interleave: u32,
+    /// Where the hierarchies were built: `cpu`, or `gpu` (`--device gpu`, unless the GPU's
+    /// builder handed them to the CPU's: the gather construction, or inputs too large for
+    /// the adapter).
+    pub hierarchy_device: &'static str,
 }
 
 /// Renders the indirect light of the VPLs with the lighting grid hierarchy. With

@@ -134,6 +134,7 @@ impl LghFrame {
             alpha: settings.alpha,
             shadow_samples: k as u32,
             interleave: n,
+            hierarchy_device: "none",
             ..LghStats::default()
         };
         if vpls.is_empty() {
@@ -166,6 +167,7 @@ impl LghFrame {
             builder.build(&input, settings.levels, settings.construction)?;
             build_ms += start.elapsed().as_secs_f64() * 1e3;
             let Some(grid) = builder.grid() else { continue };
+            stats.hierarchy_device = builder.device();
             let start = Instant::now();
             stats.grid_lights += grid.len();
             stats.levels = stats.levels.max(grid.l_max());
