@@ -255,6 +255,12 @@ impl GridBuilder {
         self.shift = shift.map(|u| u.clamp(Vec3::ZERO, Vec3::ONE));
     }
 
+    /// The offset of the next builds ([`GridBuilder::set_shift`], clamped to [0, 1]^3).
+    #[must_use]
+    pub fn shift(&self) -> Option<Vec3> {
+        self.shift
+    }
+
     /// Builds the hierarchy of `lights`; the result is [`GridBuilder::grid`].
     ///
     /// # Errors

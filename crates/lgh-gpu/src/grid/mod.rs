@@ -155,7 +155,6 @@ pub struct GridState {
     cpu: GridBuilder,
     /// Whether the last build was the CPU's.
     on_cpu: bool,
-    shift: Option<Vec3>,
     /// The seed of the representatives' draw, if the builds draw them.
     seed: Option<u64>,
     /// The S_1 lights' representatives of the last build (valid with `drawn`).
@@ -221,9 +220,8 @@ impl Drop for GpuGridBuilder<'_> {
 
 impl HierarchyBuilder for GpuGridBuilder<'_> {
     fn set_shift(&mut self, shift: Option<Vec3>) {
-        let s = self.state();
-        s.shift = shift.map(|u| u.clamp(Vec3::ZERO, Vec3::ONE));
-        s.cpu.set_shift(shift);
+        // The CPU builder keeps the offset for both (it builds what the GPU does not).
+        self.state().cpu.set_shift(shift);
     }
 
     fn build(
@@ -241,7 +239,7 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
             let state = self.state.get_or_insert_with(GridState::default);
             let request = Request {
                 levels,
-                bounds: lighting_grid::shifted_bounds(lo, hi, state.shift),
+                bounds: lighting_grid::shifted_bounds(lo, hi, state.cpu.shift()),
                 seed: state.seed,
             };
             match build_on(ctx, lights, &request, state, &mut t, &mut self.passes) {

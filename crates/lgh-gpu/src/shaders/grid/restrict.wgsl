@@ -13,6 +13,12 @@ fn row3(at: u32) -> vec3<f32> {
     return vec3<f32>(sums[at], sums[at + 1u], sums[at + 2u]);
 }
 
+fn put3(at: u32, v: vec3<f32>) {
+    sums[at] = v.x;
+    sums[at + 1u] = v.y;
+    sums[at + 2u] = v.z;
+}
+
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let r = 1u << P.k;
@@ -49,17 +55,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         }
         let at = 16u * g;
         sums[at] = w;
-        sums[at + 1u] = p.x;
-        sums[at + 2u] = p.y;
-        sums[at + 3u] = p.z;
-        sums[at + 4u] = q.x;
-        sums[at + 5u] = q.y;
-        sums[at + 6u] = q.z;
-        sums[at + 7u] = c.x;
-        sums[at + 8u] = c.y;
-        sums[at + 9u] = c.z;
-        sums[at + 10u] = n.x;
-        sums[at + 11u] = n.y;
-        sums[at + 12u] = n.z;
+        put3(at + 1u, p);
+        put3(at + 4u, q);
+        put3(at + 7u, c);
+        put3(at + 10u, n);
     }
 }
