@@ -158,6 +158,56 @@ fn gpu_hierarchy_is_the_same_from_run_to_run() {
     assert_eq!(a, b);
 }
 
+/// A builder takes its memory from the context's pool, not its settings: after a builder
+/// with a grid shift and a draw is dropped, a new one on the same context has no grid, no
+/// representatives, and builds the unshifted grid without a draw. (The pooled state once
+/// kept the shift, and the representatives' test failed when it ran after a shifted build.)
+/// A context of its own, so that no other test's builder takes the dropped state.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn a_new_builder_keeps_nothing_of_a_dropped_one() {
+    let ctx = GpuContext::new().expect("an adapter");
+    let lights = surfaces(4000, 12);
+    let mut a = GpuGridBuilder::new(&ctx);
+    HierarchyBuilder::set_shift(&mut a, Some(Vec3::new(0.4, 0.6, 0.2)));
+    HierarchyBuilder::draw_representatives(&mut a, Some(5));
+    HierarchyBuilder::build(
+        &mut a,
+        &lights.input(),
+        LevelCount::Auto,
+        Construction::Restrict,
+    )
+    .expect("gpu build");
+    assert!(HierarchyBuilder::representatives(&a).is_some());
+    drop(a);
+    let mut b = GpuGridBuilder::new(&ctx);
+    assert!(
+        HierarchyBuilder::grid(&b).is_none(),
+        "a grid before a build"
+    );
+    assert!(HierarchyBuilder::representatives(&b).is_none());
+    HierarchyBuilder::build(
+        &mut b,
+        &lights.input(),
+        LevelCount::Auto,
+        Construction::Restrict,
+    )
+    .expect("gpu build");
+    assert!(
+        HierarchyBuilder::representatives(&b).is_none(),
+        "drawn unasked"
+    );
+    let got = HierarchyBuilder::grid(&b).expect("a grid").clone();
+    assert_close(
+        &cpu(&lights, LevelCount::Auto, None),
+        &got,
+        "after a shifted builder",
+    );
+}
+
 /// The S_1 representatives drawn on the GPU with the build are the CPU's draw
 /// (`s1_representatives`, same seed): the same hash, the same order of the lights. A slot
 /// may differ where a weight rounds differently (a light's offset an ulp off, a fused

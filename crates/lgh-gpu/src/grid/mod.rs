@@ -160,6 +160,22 @@ pub struct GridState {
     /// The S_1 lights' representatives of the last build (valid with `drawn`).
     reps: Vec<[u32; SLOTS]>,
     drawn: bool,
+    /// Whether this builder has built (a recycled state's grids are an earlier builder's).
+    built: bool,
+}
+
+impl GridState {
+    /// This state with its memory and without its settings: a builder that takes it from
+    /// the pool starts as a new one (no grid shift, no draw), whatever the builder that
+    /// dropped it was set to.
+    fn recycled(mut self) -> Self {
+        self.cpu.set_shift(None);
+        self.seed = None;
+        self.drawn = false;
+        self.on_cpu = false;
+        self.built = false;
+        self
+    }
 }
 
 /// Builds hierarchies on the GPU of `ctx` ([`HierarchyBuilder`]); the working memory comes
@@ -212,7 +228,7 @@ impl Drop for GpuGridBuilder<'_> {
                 .lock()
                 .unwrap_or_else(PoisonError::into_inner);
             if kept.len() < 2 {
-                kept.push(s);
+                kept.push(s.recycled());
             }
         }
     }
@@ -245,6 +261,7 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
             match build_on(ctx, lights, &request, state, &mut t, &mut self.passes) {
                 Ok(()) => {
                     state.on_cpu = false;
+                    state.built = true;
                     return Ok(t);
                 }
                 Err(e) => self.fallback = Some(e.to_string()),
@@ -252,6 +269,7 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
         }
         let state = self.state();
         state.on_cpu = true;
+        state.built = true;
         state.cpu.build(lights, levels, construction)
     }
 
@@ -267,12 +285,12 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
     }
 
     fn representatives(&self) -> Option<&[[u32; SLOTS]]> {
-        let s = self.state.as_ref()?;
+        let s = self.state.as_ref().filter(|s| s.built)?;
         (!s.on_cpu && s.drawn).then_some(&s.reps[..])
     }
 
     fn grid(&self) -> Option<&LightingGrid> {
-        let s = self.state.as_ref()?;
+        let s = self.state.as_ref().filter(|s| s.built)?;
         if s.on_cpu {
             s.cpu.grid()
         } else {
