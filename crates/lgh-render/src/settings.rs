@@ -83,6 +83,13 @@ pub struct ShadowSettings {
     /// (docs/design.md, "Defaults").
     #[cfg_attr(feature = "clap", arg(long, default_value_t = ShadowSettings::default().filter_color))]
     pub filter_color: f32,
+    /// lgh, slc: the a-trous filter's weight a_phi on the unshadowed sums A: taps whose
+    /// ln lum(A) differ by d weigh exp(-d^2 / a_phi), so that the ratio is not smoothed across
+    /// a place where A changes fast (a room's corners); 0 = no such weight. Default: the
+    /// method's own (lgh 0.01; slc none, its A being noisy; docs/design.md, "A-trous
+    /// filter").
+    #[cfg_attr(feature = "clap", arg(long = "filter-unshadowed"))]
+    pub filter_unshadowed: Option<f32>,
 }
 
 /// The LGH demo's colour weight of the a-trous filter (its c_phi).
@@ -95,6 +102,7 @@ impl Default for ShadowSettings {
             filter: ShadowFilter::Atrous,
             filter_passes: 5,
             filter_color: 0.1,
+            filter_unshadowed: None,
         }
     }
 }
@@ -412,6 +420,7 @@ impl RenderSettings {
             }),
             max_ratio: RATIO_VISIBILITY,
             c_phi: self.shadows.filter_color,
+            a_phi: self.shadows.filter_unshadowed.unwrap_or(0.0),
         }
     }
 
@@ -476,6 +485,11 @@ impl RenderSettings {
         }
         positive("alpha", self.lgh.alpha)?;
         positive("filter-color", self.shadows.filter_color)?;
+        if let Some(a_phi) = self.shadows.filter_unshadowed
+            && !(a_phi.is_finite() && a_phi >= 0.0)
+        {
+            return err("filter-unshadowed", &a_phi, "expected a finite number >= 0");
+        }
         positive("clamp-fraction", self.clamp_fraction)?;
         if !(self.vpl_clamp.is_finite() && (0.0..=1000.0).contains(&self.vpl_clamp)) {
             return err("vpl-clamp", &self.vpl_clamp, "expected 0 to 1000");

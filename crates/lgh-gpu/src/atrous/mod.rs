@@ -1,10 +1,11 @@
 //! The a-trous filter of the ratio estimator on the GPU (`shaders/atrous.wgsl`): S and U
-//! filtered with one set of edge-stopping weights, pass after pass (lgh-render's
+//! filtered with one set of edge-stopping weights (w_a on the key of A, which rides in U's
+//! fourth component), pass after pass (lgh-render's
 //! `denoise::atrous::filter_ratio_pair`, the same taps, weights and cut-off), one dispatch a
 //! pass between two buffers.
 
 use glam::{Vec3, Vec4};
-use lgh_render::denoise::atrous::{AtrousParams, filter_guide};
+use lgh_render::denoise::atrous::{AtrousParams, filter_guide, unshadowed_key};
 use lgh_render::passes::gbuffer::GBuffer;
 
 use rayon::prelude::*;
@@ -24,7 +25,7 @@ struct Params {
     inv_c: f32,
     inv_n: f32,
     inv_p: f32,
-    _pad: f32,
+    inv_a: f32,
 }
 
 /// The WGSL source of the kernel.
@@ -45,7 +46,7 @@ pub(crate) struct Geometry<'a> {
 }
 
 /// Records the filter's passes into `batch` (timed as `name`) over the images `pair`
-/// (per pixel S with its guide in w, then U), the input in `pair[0]`, the two buffers taking
+/// (per pixel S with its guide in w, then U with the key of A in w), the input in `pair[0]`, the two buffers taking
 /// turns; returns the index in `pair` of the filtered images.
 ///
 /// # Errors
@@ -72,7 +73,11 @@ pub(crate) fn record(
                 inv_c: 4f32.powi(pass as i32) / params.c_phi,
                 inv_n: 1.0 / params.n_phi,
                 inv_p: 1.0 / params.p_phi,
-                _pad: 0.0,
+                inv_a: if params.a_phi > 0.0 {
+                    1.0 / params.a_phi
+                } else {
+                    0.0
+                },
             },
         );
         let (from, to) = (pair[pass % 2], pair[1 - pass % 2]);
@@ -90,8 +95,8 @@ pub(crate) fn record(
     Ok(passes % 2)
 }
 
-/// Filters `s` and `u` (per pixel of `g`) in place with `params`, on the GPU; pixels that see
-/// nothing keep their values.
+/// Filters `s` and `u` (per pixel of `g`) in place with `params` (w_a on the unshadowed sums
+/// `a` where given), on the GPU; pixels that see nothing keep their values.
 ///
 /// # Errors
 /// The image exceeds the adapter's limits, or the GPU failed.
@@ -99,6 +104,7 @@ pub fn filter_ratio_pair(
     ctx: &GpuContext,
     s: &mut [Vec3],
     u: &mut [Vec3],
+    a: Option<&[Vec3]>,
     g: &GBuffer,
     params: &AtrousParams,
 ) -> Result<(), GpuError> {
@@ -109,7 +115,11 @@ pub fn filter_ratio_pair(
     let values: Vec<[Vec4; 2]> = s
         .par_iter()
         .zip(u.par_iter())
-        .map(|(&s, &u)| [s.extend(filter_guide(s, u)), u.extend(0.0)])
+        .enumerate()
+        .map(|(i, (&s, &u))| {
+            let key = a.map_or(0.0, |a| unshadowed_key(a[i]));
+            [s.extend(filter_guide(s, u)), u.extend(key)]
+        })
         .collect();
     let gbuffer = ctx.gbuffer(g)?;
     let pair = [

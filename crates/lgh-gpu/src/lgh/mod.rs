@@ -115,9 +115,15 @@ impl IndirectMethod for GpuLgh {
 
 /// The ratio estimator's a-trous filter on the GPU ([`crate::atrous`]); false (the CPU's
 /// filter then runs) if the GPU fails.
-fn gpu_atrous(s: &mut [Vec3], u: &mut [Vec3], g: &GBuffer, params: &AtrousParams) -> bool {
+fn gpu_atrous(
+    s: &mut [Vec3],
+    u: &mut [Vec3],
+    a: Option<&[Vec3]>,
+    g: &GBuffer,
+    params: &AtrousParams,
+) -> bool {
     GpuContext::shared()
-        .and_then(|ctx| crate::atrous::filter_ratio_pair(ctx, s, u, g, params))
+        .and_then(|ctx| crate::atrous::filter_ratio_pair(ctx, s, u, a, g, params))
         .is_ok()
 }
 

@@ -154,6 +154,7 @@ pub(crate) fn record<'c>(
         let params = AtrousParams {
             passes: filter.passes,
             c_phi: filter.c_phi,
+            a_phi: filter.a_phi,
             ..AtrousParams::lgh_defaults(frame.radius)
         };
         let geometry = Geometry {

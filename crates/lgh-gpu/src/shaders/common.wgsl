@@ -32,3 +32,9 @@ fn filter_guide(s: vec3<f32>, u: vec3<f32>) -> f32 {
     }
     return 1.0;
 }
+
+// The key of an unshadowed sum A that the a-trous filter's weight w_a compares (lgh-render's
+// denoise::atrous::unshadowed_key): ln lum(A), lum(A) at least 1e-20.
+fn unshadowed_key(a: vec3<f32>) -> f32 {
+    return log(max(luminance(a), 1e-20));
+}

@@ -403,7 +403,14 @@ pub fn render_direct(
     let irradiance: Vec<Vec3> = if any_analytic {
         let (mut s, mut u): (Vec<Vec3>, Vec<Vec3>) = px.par_iter().map(|p| (p.s, p.u)).unzip();
         timings.time("direct_filter", || {
-            filter_ratio_pair_in_place(&mut s, &mut u, g, &direct_filter(world.radius), buffers);
+            filter_ratio_pair_in_place(
+                &mut s,
+                &mut u,
+                None,
+                g,
+                &direct_filter(world.radius),
+                buffers,
+            );
         });
         timings.time("direct_composite", || {
             px.par_iter()

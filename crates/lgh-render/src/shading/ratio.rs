@@ -33,6 +33,8 @@ pub struct RatioFilter {
     pub max_ratio: f32,
     /// The a-trous colour weight c_phi of the first pass.
     pub c_phi: f32,
+    /// The a-trous weight a_phi on the unshadowed sums A ([`AtrousParams::a_phi`]; 0: none).
+    pub a_phi: f32,
 }
 
 /// [`RatioFilter::max_ratio`] of a visibility ratio.
@@ -129,10 +131,11 @@ pub fn shadowed_indirect(
     shadowed_indirect_with(world, g, a, estimates, settings, t, memory, None)
 }
 
-/// An a-trous filter of S and U run elsewhere (lgh-gpu's): filters them in place as
-/// [`filter_ratio_pair_in_place`] does and returns true, or returns false (the GPU failed)
-/// and leaves them to the CPU's filter.
-pub type AtrousBackend = fn(&mut [Vec3], &mut [Vec3], &GBuffer, &AtrousParams) -> bool;
+/// An a-trous filter of S and U (with the unshadowed sums A where given) run elsewhere
+/// (lgh-gpu's): filters them in place as [`filter_ratio_pair_in_place`] does and returns
+/// true, or returns false (the GPU failed) and leaves them to the CPU's filter.
+pub type AtrousBackend =
+    fn(&mut [Vec3], &mut [Vec3], Option<&[Vec3]>, &GBuffer, &AtrousParams) -> bool;
 
 /// [`shadowed_indirect`] with the a-trous filter of `atrous` where given.
 #[must_use]
@@ -192,11 +195,13 @@ pub fn shadowed_indirect_with(
             let params = AtrousParams {
                 passes: settings.passes,
                 c_phi: settings.c_phi,
+                a_phi: settings.a_phi,
                 ..AtrousParams::lgh_defaults(world.radius)
             };
             let (mut s, mut u) = (s_hat, u_hat);
-            if !atrous.is_some_and(|f| f(&mut s, &mut u, g, &params)) {
-                filter_ratio_pair_in_place(&mut s, &mut u, g, &params, &mut memory.filter);
+            let guide = Some(&a[..]);
+            if !atrous.is_some_and(|f| f(&mut s, &mut u, guide, g, &params)) {
+                filter_ratio_pair_in_place(&mut s, &mut u, guide, g, &params, &mut memory.filter);
             }
             (s, u)
         } else {

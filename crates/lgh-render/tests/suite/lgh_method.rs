@@ -397,7 +397,7 @@ fn atrous_keeps_constants_and_edges() {
     let g = GBuffer::render(&world, &frame, w, h);
     let params = AtrousParams::lgh_defaults(world.radius);
     let c = vec![Vec3::new(0.3, 0.2, 0.1); g.len()];
-    let (s, u) = filter_ratio_pair(&c, &c, &g, &params);
+    let (s, u) = filter_ratio_pair(&c, &c, None, &g, &params);
     for i in 0..g.len() {
         assert!(
             (s[i] - c[i]).abs().max_element() < 1e-6 && (u[i] - c[i]).abs().max_element() < 1e-6
@@ -414,7 +414,7 @@ fn atrous_keeps_constants_and_edges() {
             }
         })
         .collect();
-    let (sf, uf) = filter_ratio_pair(&s_img, &u_img, &g, &params);
+    let (sf, uf) = filter_ratio_pair(&s_img, &u_img, None, &g, &params);
     let mut checked = 0;
     for y in 2..h as usize - 2 {
         for x in 2..w as usize - 2 {

@@ -15,6 +15,7 @@ mod hostile;
 mod ism;
 mod lgh_method;
 mod pt_method;
+mod ratio_filter;
 mod region;
 mod sequence;
 mod shared_scenes;

@@ -10,6 +10,13 @@
 //! demo's (docs/design.md, "A-trous filter"): 5 passes, c_phi = 0.5, n_phi = 0.1, p_phi = 0.66 x scene
 //! radius.
 //!
+//! A fourth weight w_a = exp(-(a_p - a_q)^2 / a_phi), a_p = ln lum(A_p), compares the
+//! unshadowed sums A of the two pixels ([`AtrousParams::a_phi`], off at 0). lgh's A is the
+//! hierarchy's deterministic sum, free of noise, and it changes fast where the ratio does
+//! near the corners of a room (a VPL a few centimetres away on the other wall): without
+//! w_a the filter carried the ratio of the open wall into the corner, which came out too
+//! bright (docs/design.md, "A-trous filter").
+//!
 //! [`filter_ratio_pair`] filters the two images of the ratio estimator, S and U, with one and
 //! the same set of weights (the guide is the current ratio lum(S)/lum(U)), so that
 //! D(S) <= D(U) channel by channel and the filtered ratio stays in [0, 1]. (The demo weighs S
@@ -35,6 +42,9 @@ pub struct AtrousParams {
     pub n_phi: f32,
     /// Position weight parameter p_phi (squared world distance scale).
     pub p_phi: f32,
+    /// The unshadowed sum's weight parameter a_phi, on ln lum(A) (0: no such weight, and
+    /// none without A).
+    pub a_phi: f32,
 }
 
 impl AtrousParams {
@@ -46,8 +56,16 @@ impl AtrousParams {
             c_phi: 0.5,
             n_phi: 0.1,
             p_phi: 0.66 * radius,
+            a_phi: 0.0,
         }
     }
+}
+
+/// The key of the unshadowed sum A that w_a compares: ln lum(A), lum(A) at least 1e-20
+/// (a pixel that no light reaches is far from every lit one).
+#[must_use]
+pub fn unshadowed_key(a: Vec3) -> f32 {
+    luminance(a).max(1e-20).ln()
 }
 
 const H1: [f32; 5] = [1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
@@ -87,14 +105,20 @@ fn exp_neg(e: f32) -> f32 {
     f32::from_bits(bits) * p
 }
 
-// The 14 per-pixel planes of [`Planes`], numbered: position (0..3), normal (3..6), S and U
-// (6..12), guide and hit.
+// The 15 per-pixel planes of [`Planes`], numbered: position (0..3), normal (3..6), S and U
+// (6..12), guide, hit and the key of A.
 /// First of the planes a pass writes (S r, g, b, U r, g, b, guide).
 const OUT: usize = 6;
 /// The guide plane.
 const GUIDE: usize = 12;
 /// The hit plane (1 where the pixel sees a surface, else 0).
 const HIT: usize = 13;
+/// The plane of A's key ([`unshadowed_key`]; 0 without A).
+const KEY_A: usize = 14;
+/// Planes that never change: position, normal, hit and A's key.
+const FIXED: usize = 8;
+/// Planes a pass rewrites: S, U and guide.
+const DYNAMIC: usize = 7;
 
 /// Exponent of the edge-stopping weight beyond which a tap counts as zero ([`weight_row`]).
 const NEGLIGIBLE: f32 = 40.0;
@@ -121,9 +145,9 @@ impl Layout {
     }
 }
 
-/// The planes a pass reads: position x, y, z, normal x, y, z and hit (1 or 0), which never
-/// change (`fixed`, planes 0..6 and 6), and S r, g, b, U r, g, b and guide, which every pass
-/// rewrites (`dynamic`, ping-ponged between two buffers).
+/// The planes a pass reads: position x, y, z, normal x, y, z, hit (1 or 0) and A's key,
+/// which never change (`fixed`, planes 0..6, 6 and 7), and S r, g, b, U r, g, b and guide,
+/// which every pass rewrites (`dynamic`, ping-ponged between two buffers).
 struct Planes<'a> {
     layout: Layout,
     fixed: &'a [f32],
@@ -136,6 +160,7 @@ impl Planes<'_> {
         let (buf, k) = match k {
             OUT..HIT => (self.dynamic, k - OUT),
             HIT => (self.fixed, 6),
+            KEY_A => (self.fixed, 7),
             _ => (self.fixed, k),
         };
         let at = k * self.layout.plane() + y * self.layout.stride;
@@ -143,8 +168,9 @@ impl Planes<'_> {
     }
 }
 
-/// Filters S and U with identical edge-stopping weights (see the module docs). Pixels that
-/// see nothing are left as they are and never used as taps.
+/// Filters S and U with identical edge-stopping weights (see the module docs), w_a on the
+/// unshadowed sums `a` where given. Pixels that see nothing are left as they are and never
+/// used as taps.
 ///
 /// Layout for speed: structure-of-arrays planes with padded rows, read in blocks of
 /// `LANES` pixels so that the loops vectorise; only the 7 planes a pass rewrites are
@@ -155,13 +181,14 @@ impl Planes<'_> {
 pub fn filter_ratio_pair(
     s: &[Vec3],
     u: &[Vec3],
+    a: Option<&[Vec3]>,
     g: &GBuffer,
     params: &AtrousParams,
 ) -> (Vec<Vec3>, Vec<Vec3>) {
-    filter_ratio_pair_with(s, u, g, params, &mut AtrousBuffers::default())
+    filter_ratio_pair_with(s, u, a, g, params, &mut AtrousBuffers::default())
 }
 
-/// The working memory of [`filter_ratio_pair_with`]: 21 image-sized planes (about 90 MB at
+/// The working memory of [`filter_ratio_pair_with`]: 22 image-sized planes (about 95 MB at
 /// 1280x720). A renderer that filters every frame keeps one, so that the planes are not
 /// paged in afresh each frame.
 #[derive(Debug, Default)]
@@ -181,12 +208,13 @@ pub struct AtrousBuffers {
 pub fn filter_ratio_pair_with(
     s: &[Vec3],
     u: &[Vec3],
+    a: Option<&[Vec3]>,
     g: &GBuffer,
     params: &AtrousParams,
     buffers: &mut AtrousBuffers,
 ) -> (Vec<Vec3>, Vec<Vec3>) {
     let (mut s, mut u) = (s.to_vec(), u.to_vec());
-    filter_ratio_pair_in_place(&mut s, &mut u, g, params, buffers);
+    filter_ratio_pair_in_place(&mut s, &mut u, a, g, params, buffers);
     (s, u)
 }
 
@@ -195,6 +223,7 @@ pub fn filter_ratio_pair_with(
 pub fn filter_ratio_pair_in_place(
     s: &mut [Vec3],
     u: &mut [Vec3],
+    a: Option<&[Vec3]>,
     g: &GBuffer,
     params: &AtrousParams,
     buffers: &mut AtrousBuffers,
@@ -219,18 +248,19 @@ pub fn filter_ratio_pair_in_place(
         // A new layout: zero everything, padding included (nothing writes the padding).
         // Fresh zeroed allocations, not a resize: the system gives zero pages, which the
         // parallel fill below then touches, instead of one thread writing 90 MB of zeros.
-        for buf in [&mut *fixed, &mut *cur, &mut *next] {
-            *buf = vec![0.0; 7 * plane];
+        *fixed = vec![0.0; FIXED * plane];
+        for buf in [&mut *cur, &mut *next] {
+            *buf = vec![0.0; DYNAMIC * plane];
         }
         // The rings' padding moves with the stride.
         rings.clear();
         *laid_out = Some((layout.stride, pad, w, h));
     }
-    // One pass over the image writes all 14 input planes, row by row in parallel: plane k,
+    // One pass over the image writes all 15 input planes, row by row in parallel: plane k,
     // row y holds the image's pixels from `pad` on, zero where the pixel sees nothing. The
     // passes write only pixels that see something; elsewhere the output planes may hold an
     // earlier image's values, which are finite and weigh 0 (their hit flag is 0).
-    let mut rows: Vec<Vec<&mut [f32]>> = (0..h).map(|_| Vec::with_capacity(14)).collect();
+    let mut rows: Vec<Vec<&mut [f32]>> = (0..h).map(|_| Vec::with_capacity(15)).collect();
     for buf in [&mut *fixed, &mut *cur] {
         for plane_rows in buf.chunks_mut(plane) {
             for (y, row) in plane_rows.chunks_mut(layout.stride).enumerate() {
@@ -247,21 +277,28 @@ pub fn filter_ratio_pair_in_place(
                 }
                 continue;
             }
+            let key = a.map_or(0.0, |a| unshadowed_key(a[p]));
             let values = [
                 g.position[p].to_array(),
                 g.normal[p].to_array(),
-                [1.0, s[p].x, s[p].y],
-                [s[p].z, u[p].x, u[p].y],
-                [u[p].z, filter_guide(s[p], u[p]), 0.0],
+                [1.0, key, s[p].x],
+                [s[p].y, s[p].z, u[p].x],
+                [u[p].y, u[p].z, filter_guide(s[p], u[p])],
             ];
-            // Planes in order: position, normal, hit (fixed), then S, U, guide.
-            for (k, &v) in values.as_flattened()[..14].iter().enumerate() {
+            // Planes in order: position, normal, hit, A's key (fixed), then S, U, guide.
+            for (k, &v) in values.as_flattened().iter().enumerate() {
                 row[k][pad + x] = v;
             }
         }
     });
     let (fixed, mut cur, mut next) = (&*fixed, cur, next);
     let (inv_n, inv_p) = (1.0 / params.n_phi, 1.0 / params.p_phi);
+    // No A, or no weight on it: the keys are all 0 and the term vanishes.
+    let inv_a = if a.is_some() && params.a_phi > 0.0 {
+        1.0 / params.a_phi
+    } else {
+        0.0
+    };
     for pass in 0..passes {
         let step = 1usize << pass;
         let inv_c = 4f32.powi(pass as i32) / params.c_phi;
@@ -307,7 +344,7 @@ pub fn filter_ratio_pair_in_place(
                         rows,
                         step,
                     },
-                    [inv_c, inv_n, inv_p],
+                    [inv_c, inv_n, inv_p, inv_a],
                     &mut ring,
                 );
             });
@@ -426,7 +463,7 @@ fn filter_chain(
     out: &mut [Vec<&mut [f32]>],
     w: usize,
     chain: Chain,
-    inv: [f32; 3],
+    inv: [f32; 4],
     ring: &mut Vec<f32>,
 ) {
     let Layout { stride, height, .. } = src.layout;
@@ -457,7 +494,7 @@ fn filter_chain(
 }
 
 /// The weights of the [`FORWARD`] taps of every pixel of row `r`, tap o at
-/// `ring_row[o * stride + pad + x]`: h(dx) h(dy) w_c w_n w_x, times 0 where either pixel sees
+/// `ring_row[o * stride + pad + x]`: h(dx) h(dy) w_c w_n w_x w_a, times 0 where either pixel sees
 /// nothing or the tap lies below the image.
 #[inline(always)]
 fn weight_row(
@@ -465,7 +502,7 @@ fn weight_row(
     ring_row: &mut [f32],
     r: usize,
     step: usize,
-    [inv_c, inv_n, inv_p]: [f32; 3],
+    [inv_c, inv_n, inv_p, inv_a]: [f32; 4],
 ) {
     let Layout {
         stride,
@@ -473,10 +510,10 @@ fn weight_row(
         height,
     } = src.layout;
     let wp = stride - 2 * pad;
-    const KEYS: [usize; 8] = [0, 1, 2, 3, 4, 5, GUIDE, HIT];
-    let centre: [&[f32]; 8] = KEYS.map(|k| &src.row(k, r)[pad..pad + wp]);
+    const KEYS: [usize; 9] = [0, 1, 2, 3, 4, 5, GUIDE, HIT, KEY_A];
+    let centre: [&[f32]; 9] = KEYS.map(|k| &src.row(k, r)[pad..pad + wp]);
     // Per tap: its 8 planes shifted, or None below the image.
-    let taps: [Option<[&[f32]; 8]>; 12] = FORWARD.map(|(dx, dy)| {
+    let taps: [Option<[&[f32]; 9]>; 12] = FORWARD.map(|(dx, dy)| {
         let qy = r + dy as usize * step;
         (qy < height).then(|| {
             let from = (pad as isize + dx * step as isize) as usize;
@@ -486,8 +523,8 @@ fn weight_row(
     let hxy: [f32; 12] = FORWARD.map(|(dx, dy)| H1[(dx + 2) as usize] * H1[(dy + 2) as usize]);
     for b in (0..wp).step_by(LANES) {
         let c = |k: usize| block(centre[k], b);
-        let (cpx, cpy, cpz, cnx, cny, cnz, cg, ch) =
-            (c(0), c(1), c(2), c(3), c(4), c(5), c(6), c(7));
+        let (cpx, cpy, cpz, cnx, cny, cnz, cg, ch, ca) =
+            (c(0), c(1), c(2), c(3), c(4), c(5), c(6), c(7), c(8));
         for (o, tap) in taps.iter().enumerate() {
             let dst = &mut ring_row[o * stride + pad + b..o * stride + pad + b + LANES];
             let Some(q) = tap else {
@@ -495,17 +532,19 @@ fn weight_row(
                 continue;
             };
             let t = |k: usize| block(q[k], b);
-            let (qpx, qpy, qpz, qnx, qny, qnz, qg, qh) =
-                (t(0), t(1), t(2), t(3), t(4), t(5), t(6), t(7));
+            let (qpx, qpy, qpz, qnx, qny, qnz, qg, qh, qa) =
+                (t(0), t(1), t(2), t(3), t(4), t(5), t(6), t(7), t(8));
             for m in 0..LANES {
                 let dc = cg[m] - qg[m];
                 let (dnx, dny, dnz) = (cnx[m] - qnx[m], cny[m] - qny[m], cnz[m] - qnz[m]);
                 let (dpx, dpy, dpz) = (cpx[m] - qpx[m], cpy[m] - qpy[m], cpz[m] - qpz[m]);
-                // w_c w_n w_x as one exponential (each exponent is <= 0, so the clamps to 1
+                let da = ca[m] - qa[m];
+                // w_c w_n w_x w_a as one exponential (each exponent is <= 0, so the clamps to 1
                 // of the separate weights are implied).
                 let e = dc * dc * inv_c
                     + (dnx * dnx + dny * dny + dnz * dnz) * inv_n
-                    + (dpx * dpx + dpy * dpy + dpz * dpz) * inv_p;
+                    + (dpx * dpx + dpy * dpy + dpz * dpz) * inv_p
+                    + da * da * inv_a;
                 // Weights below e^-40 (1e-18 of the centre's) are set to zero: their products
                 // with the pixel values would be subnormal floats, which cost the vector units
                 // a hundred times a normal multiply (the wide passes, whose colour weight
