@@ -166,6 +166,7 @@ fn series(base: &RenderSettings) -> Vec<(&'static str, String, RenderSettings)> 
         let mut paper = lgh.clone();
         paper.lgh = LghSettings::paper();
         paper.shadows.filter_color = DEMO_FILTER_COLOR;
+        paper.shadows.filter_unshadowed = 0.0;
         paper.tiling.interleave = Some(1);
         let mut paper2 = paper.clone();
         paper2.lgh.alpha = 2.0;

@@ -85,11 +85,10 @@ pub struct ShadowSettings {
     pub filter_color: f32,
     /// lgh, slc: the a-trous filter's weight a_phi on the unshadowed sums A: taps whose
     /// ln lum(A) differ by d weigh exp(-d^2 / a_phi), so that the ratio is not smoothed across
-    /// a place where A changes fast (a room's corners); 0 = no such weight. Default: the
-    /// method's own (lgh 0.01; slc none, its A being noisy; docs/design.md, "A-trous
-    /// filter").
-    #[cfg_attr(feature = "clap", arg(long = "filter-unshadowed"))]
-    pub filter_unshadowed: Option<f32>,
+    /// a place where A changes fast (a room's corners, which came out too bright); 0 = no
+    /// such weight (docs/design.md, "A-trous filter").
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = ShadowSettings::default().filter_unshadowed))]
+    pub filter_unshadowed: f32,
 }
 
 /// The LGH demo's colour weight of the a-trous filter (its c_phi).
@@ -102,7 +101,7 @@ impl Default for ShadowSettings {
             filter: ShadowFilter::Atrous,
             filter_passes: 5,
             filter_color: 0.1,
-            filter_unshadowed: None,
+            filter_unshadowed: 0.01,
         }
     }
 }
@@ -420,7 +419,7 @@ impl RenderSettings {
             }),
             max_ratio: RATIO_VISIBILITY,
             c_phi: self.shadows.filter_color,
-            a_phi: self.shadows.filter_unshadowed.unwrap_or(0.0),
+            a_phi: self.shadows.filter_unshadowed,
         }
     }
 
@@ -485,9 +484,8 @@ impl RenderSettings {
         }
         positive("alpha", self.lgh.alpha)?;
         positive("filter-color", self.shadows.filter_color)?;
-        if let Some(a_phi) = self.shadows.filter_unshadowed
-            && !(a_phi.is_finite() && a_phi >= 0.0)
-        {
+        let a_phi = self.shadows.filter_unshadowed;
+        if !(a_phi.is_finite() && a_phi >= 0.0) {
             return err("filter-unshadowed", &a_phi, "expected a finite number >= 0");
         }
         positive("clamp-fraction", self.clamp_fraction)?;

@@ -11,11 +11,11 @@
 //! radius.
 //!
 //! A fourth weight w_a = exp(-(a_p - a_q)^2 / a_phi), a_p = ln lum(A_p), compares the
-//! unshadowed sums A of the two pixels ([`AtrousParams::a_phi`], off at 0). lgh's A is the
-//! hierarchy's deterministic sum, free of noise, and it changes fast where the ratio does
-//! near the corners of a room (a VPL a few centimetres away on the other wall): without
-//! w_a the filter carried the ratio of the open wall into the corner, which came out too
-//! bright (docs/design.md, "A-trous filter").
+//! unshadowed sums A of the two pixels ([`AtrousParams::a_phi`], off at 0). A changes fast
+//! where the ratio does near the corners of a room (a VPL a few centimetres away on the
+//! other wall), and D(S) / D(U) weighs a tap by its U: without w_a the filter carried the
+//! ratio of the open wall into the corner, which came out too bright (docs/design.md,
+//! "A-trous filter").
 //!
 //! [`filter_ratio_pair`] filters the two images of the ratio estimator, S and U, with one and
 //! the same set of weights (the guide is the current ratio lum(S)/lum(U)), so that

@@ -64,7 +64,7 @@ pub mod tables;
 pub use prepared::{LghFrame, LoopResult, Prepared};
 pub use settings::{
     DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, INTERACTIVE_INTERLEAVE, JitterAt,
-    LGH_A_PHI, LghSettings, ShadowTarget, auto_tile,
+    LghSettings, ShadowTarget, auto_tile,
 };
 
 /// The lighting grid hierarchy with stochastic ray-traced shadows.

@@ -18,7 +18,7 @@ use rayon::prelude::*;
 
 use super::LghStats;
 use super::lights::{LghTargets, ShadeLights, split_by_normal};
-use super::settings::{DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt, LGH_A_PHI};
+use super::settings::{DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt};
 use super::settings::{ShadowTarget, auto_tile};
 use super::shade::{RowContext, RowScratch, shade_rows};
 use crate::memory::FrameMemory;
@@ -333,9 +333,8 @@ impl LghFrame {
     }
 
     /// The ratio estimator's settings for this frame: the blur of its interleaving, the
-    /// a-trous passes, the largest ratio (lgh's unbiased estimate corrects A, so its ratio
-    /// may exceed 1), and the a-trous weight on A ([`LGH_A_PHI`] unless set: lgh's A is
-    /// the hierarchy's sum, free of noise, so it tells where the ratio may change).
+    /// a-trous passes, and the largest ratio (lgh's unbiased estimate corrects A, so its
+    /// ratio may exceed 1).
     #[must_use]
     pub fn ratio_filter(&self, inputs: &MethodInputs) -> RatioFilter {
         let all = inputs.settings;
@@ -345,7 +344,6 @@ impl LghFrame {
             } else {
                 RATIO_VISIBILITY
             },
-            a_phi: all.shadows.filter_unshadowed.unwrap_or(LGH_A_PHI),
             ..all.ratio_filter(self.n)
         }
     }

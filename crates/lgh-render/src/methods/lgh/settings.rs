@@ -223,10 +223,6 @@ pub const DEFAULT_INTERLEAVE: u32 = 2;
 /// (docs/design.md, "Defaults"; the paper's measurements use 1 and 4).
 pub const DEFAULT_SHADOW_SAMPLES: u32 = 5;
 
-/// The a-trous filter's weight a_phi on ln lum(A) of `lgh` when `--filter-unshadowed` is
-/// not given: 0.01, so that sums 10% apart weigh 0.4 (docs/design.md, "A-trous filter").
-pub const LGH_A_PHI: f32 = 0.01;
-
 /// The n of n x n interleaved sampling for interactive frame rates (the viewer's start,
 /// and the paper's real-time measurements): each pixel shades 1/16 of the lights.
 pub const INTERACTIVE_INTERLEAVE: u32 = 4;
