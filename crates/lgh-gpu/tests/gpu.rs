@@ -20,6 +20,7 @@ fn every_shader_is_valid_wgsl() {
         lgh_gpu::direct::composite_source(),
         lgh_gpu::interleave::blur_source(),
         lgh_gpu::interleave::discontinuities_source(),
+        lgh_gpu::interleave::keys_source(),
         lgh_gpu::ratio::ratio_source(),
     ]
     .into_iter()

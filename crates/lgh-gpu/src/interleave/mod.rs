@@ -1,5 +1,6 @@
-//! The interleaving blur on the GPU (`shaders/discontinuities.wgsl`, `shaders/blur.wgsl`):
-//! lgh-render's `shading::interleave::{discontinuities, blur_n}` (LGH 2019 section 4.3;
+//! The interleaving blur on the GPU (`shaders/discontinuities.wgsl`, `shaders/blur.wgsl`,
+//! `shaders/blur_keys.wgsl`): lgh-render's `shading::interleave::{discontinuities,
+//! blur_n_keyed}` (LGH 2019 section 4.3;
 //! docs/design.md, "Interleaved sampling"), recorded into a frame's batch so that the
 //! lighting loop's images stay on the GPU from the loop to the ratio estimator's filter.
 
@@ -36,12 +37,30 @@ struct BlurUniform {
     plane_first: u32,
     plane_count: u32,
     weights: [f32; 20],
+    a_diff: f32,
+    _pad: [f32; 3],
+}
+
+/// `Params` of `blur_keys.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct KeyParams {
+    pixels: u32,
+    planes: u32,
+    plane: u32,
+    _pad: u32,
 }
 
 /// The WGSL source of the blur kernel.
 #[must_use]
 pub fn blur_source() -> String {
     crate::kernel(&[include_str!("../shaders/blur.wgsl")])
+}
+
+/// The WGSL source of the kernel of the keys of A.
+#[must_use]
+pub fn keys_source() -> String {
+    crate::kernel(&[include_str!("../shaders/blur_keys.wgsl")])
 }
 
 /// The WGSL source of the discontinuity kernel.
@@ -57,7 +76,8 @@ pub fn supported(p: &BlurParams) -> bool {
 }
 
 /// Images blurred in place: `planes` vec4s per pixel, of which `first..first + count` are
-/// blurred with `params`.
+/// blurred with `params`; where `params.a_diff` > 0 the walks stop on the keys of plane 0
+/// (A, blurred by an earlier group).
 pub(crate) struct Planes {
     pub first: u32,
     pub count: u32,
@@ -66,14 +86,15 @@ pub(crate) struct Planes {
 
 /// Records the blur of `images` (`planes` vec4s per pixel, in place through `scratch` of the
 /// same size) into `batch`: the discontinuities of `p` (the z and normal thresholds of the
-/// first group) once into `jumps`, then per group the pass along x and the pass along y.
+/// first group) once into `jumps`, then per group the pass along x and the pass along y,
+/// a group with a stop on A after the keys of plane 0 as the groups before left it.
 ///
 /// # Errors
 /// A radius above [`MAX_RADIUS`], or the image exceeds one dispatch.
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn record(
-    ctx: &GpuContext,
-    batch: &mut Batch<'_>,
+pub(crate) fn record<'c>(
+    ctx: &'c GpuContext,
+    batch: &mut Batch<'c>,
     g: (&GpuGBuffer, u32, u32),
     images: &Lease<'_>,
     scratch: &Lease<'_>,
@@ -106,25 +127,29 @@ pub(crate) fn record(
     );
     batch.dispatch("interleave_blur", &pipeline, &bind, n)?;
     let pipeline = ctx.pipeline("blur", blur_source);
-    for vertical in [0, 1] {
-        let (from, to) = if vertical == 0 {
-            (images, scratch)
-        } else {
-            (scratch, images)
-        };
-        for group in groups {
-            let p = &group.params;
-            if !supported(p) {
-                return Err(GpuError::TooLarge(format!(
-                    "a blur radius of {} (the GPU's blur takes {MAX_RADIUS})",
-                    p.radius
-                )));
-            }
-            // lgh-render's weights, computed alike.
-            let mut weights = [0.0f32; 20];
-            for (k, w) in weights.iter_mut().enumerate().take(p.radius as usize + 1) {
-                *w = (-((k * k) as f32) / (2.0 * p.sigma * p.sigma)).exp();
-            }
+    let keys = ctx.output("blur keys", 4 * n as u64)?;
+    for group in groups {
+        let p = &group.params;
+        if !supported(p) {
+            return Err(GpuError::TooLarge(format!(
+                "a blur radius of {} (the GPU's blur takes {MAX_RADIUS})",
+                p.radius
+            )));
+        }
+        if p.a_diff > 0.0 {
+            record_keys(ctx, batch, images, &keys, (n as u32, planes))?;
+        }
+        // lgh-render's weights, computed alike.
+        let mut weights = [0.0f32; 20];
+        for (k, w) in weights.iter_mut().enumerate().take(p.radius as usize + 1) {
+            *w = (-((k * k) as f32) / (2.0 * p.sigma * p.sigma)).exp();
+        }
+        for vertical in [0, 1] {
+            let (from, to) = if vertical == 0 {
+                (images, scratch)
+            } else {
+                (scratch, images)
+            };
             let uniform = ctx.uniform(
                 "blur",
                 &BlurUniform {
@@ -137,6 +162,8 @@ pub(crate) fn record(
                     plane_first: group.first,
                     plane_count: group.count,
                     weights,
+                    a_diff: p.a_diff,
+                    _pad: [0.0; 3],
                 },
             );
             let bind = ctx.bind_group(
@@ -147,10 +174,42 @@ pub(crate) fn record(
                     jumps.binding(),
                     from.binding(),
                     to.binding(),
+                    keys.binding(),
                 ],
             );
             batch.dispatch("interleave_blur", &pipeline, &bind, n)?;
         }
     }
+    batch.keep(keys);
     Ok(())
+}
+
+/// Records the keys of plane 0 of `images` (`planes` vec4s per pixel, `pixels` of them)
+/// into `keys`.
+fn record_keys(
+    ctx: &GpuContext,
+    batch: &mut Batch<'_>,
+    images: &Lease<'_>,
+    keys: &Lease<'_>,
+    (pixels, planes): (u32, u32),
+) -> Result<(), GpuError> {
+    let pipeline = ctx.pipeline("blur keys", keys_source);
+    let uniform = ctx.uniform(
+        "blur keys",
+        &KeyParams {
+            pixels,
+            planes,
+            plane: 0,
+            _pad: 0,
+        },
+    );
+    let bind = ctx.bind_group(
+        &pipeline,
+        vec![
+            uniform.as_entire_binding(),
+            images.binding(),
+            keys.binding(),
+        ],
+    );
+    batch.dispatch("interleave_blur", &pipeline, &bind, pixels as usize)
 }

@@ -4,7 +4,9 @@
 // (discontinuities.wgsl) or enters a pixel that sees nothing; with n x n interleaving
 // (phases = n > 1) the taps are averaged phase by phase (taps k apart with the same k mod n
 // come from the same sub-image) and the phase means count alike, as balanced_walk on the CPU
-// (which for a full walk equals its phase-normalised convolution). Pixels that see nothing
+// (which for a full walk equals its phase-normalised convolution). With a_diff > 0 a walk
+// also stops before a pixel whose key (ln lum A, blur_keys.wgsl) differs from the centre's
+// by more than a_diff (blur_n_keyed on the CPU). Pixels that see nothing
 // keep their values; w components pass through. Images: `planes` vec4s per pixel, this pass
 // blurs planes plane_first .. plane_first + plane_count.
 
@@ -22,6 +24,8 @@ struct Params {
     plane_count: u32,
     // The Gaussian's weights w_0 .. w_radius, four a vec4.
     weights: array<vec4<f32>, 5>,
+    // The stop on A's key (0: none).
+    a_diff: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -29,6 +33,13 @@ struct Params {
 @group(0) @binding(2) var<storage, read> jumps: array<u32>;
 @group(0) @binding(3) var<storage, read> src: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> dst: array<vec4<f32>>;
+// Per pixel: the key of A (read only where a_diff > 0).
+@group(0) @binding(5) var<storage, read> keys: array<f32>;
+
+// True if the walk from `centre` may not enter `next` because A's key moved too far.
+fn key_stops(centre: u32, next: u32) -> bool {
+    return params.a_diff > 0.0 && abs(keys[next] - keys[centre]) > params.a_diff;
+}
 
 fn weight(k: u32) -> f32 {
     return params.weights[k / 4u][k % 4u];
@@ -62,7 +73,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var at = i;
     while (fwd < params.radius && pos + fwd + 1u < len) {
         let next = at + step;
-        if ((jumps[at] & bit) != 0u || !hit(next)) {
+        if ((jumps[at] & bit) != 0u || !hit(next) || key_stops(i, next)) {
             break;
         }
         fwd++;
@@ -72,7 +83,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     at = i;
     while (back < params.radius && back < pos) {
         let next = at - step;
-        if ((jumps[next] & bit) != 0u || !hit(next)) {
+        if ((jumps[next] & bit) != 0u || !hit(next) || key_stops(i, next)) {
             break;
         }
         back++;

@@ -136,6 +136,13 @@ pub struct BlurParams {
     /// averaged phase by phase (taps at offsets k with the same k mod n come from the same
     /// sub-image), so that every sub-image counts equally; 1 for a plain blur.
     pub phases: u32,
+    /// Change of the unshadowed sum A: where the blur is given keys (ln lum A per pixel,
+    /// [`blur_n_keyed`]), a walk stops before a pixel whose key differs from its centre's by
+    /// more than this (0: no such stop). The shadow estimates S and U are summed, so a tap
+    /// weighs by its U: without the stop, near a room's corner, where A climbs steeply, the
+    /// taps of the open wall set the corner's ratio (docs/design.md, "Interleaved
+    /// sampling").
+    pub a_diff: f32,
 }
 
 impl BlurParams {
@@ -148,6 +155,7 @@ impl BlurParams {
             z_diff: 8.0,
             n_diff: 0.5,
             phases: 1,
+            a_diff: 0.05,
         }
     }
 
@@ -156,11 +164,12 @@ impl BlurParams {
     /// the same weight 1 / n^2 (at n = 4 the taps weigh (1/2, 1, 1, 1, 1/2) / 4 per axis).
     /// Every light then counts once, evaluated at the pixel of its own sub-image within the
     /// n x n window, and the image keeps its detail below the wide blur's 17 pixels
-    /// (docs/design.md, "Interleaved sampling").
+    /// (docs/design.md, "Interleaved sampling"). A itself is blurred without the stop on A.
     #[must_use]
     pub fn recombination(&self) -> Self {
         Self {
             radius: (self.phases / 2).max(1),
+            a_diff: 0.0,
             ..*self
         }
     }
@@ -223,6 +232,26 @@ pub fn discontinuities(g: &GBuffer, p: &BlurParams) -> Vec<u8> {
         .collect()
 }
 
+/// Shortens the walks `[right, left, down, up]` of an image `w` pixels wide so that each
+/// stops before the first pixel whose key differs from its centre's by more than `limit`.
+fn stop_at_keys(keys: &[f32], w: usize, limit: f32, walks: [&mut [u8]; 4]) {
+    let strides = [1, -1, w as isize, -(w as isize)];
+    for (walk, stride) in walks.into_iter().zip(strides) {
+        walk.par_iter_mut().enumerate().for_each(|(i, run)| {
+            let centre = keys[i];
+            let mut k = 0u8;
+            while k < *run {
+                let j = (i as isize + (isize::from(k) + 1) * stride) as usize;
+                if (keys[j] - centre).abs() > limit {
+                    break;
+                }
+                k += 1;
+            }
+            *run = k;
+        });
+    }
+}
+
 /// [`discontinuities`] bit: a jump to the neighbour at (1, 0).
 pub const JUMP_X: u8 = 1;
 /// [`discontinuities`] bit: a jump to the neighbour at (0, 1).
@@ -241,10 +270,23 @@ pub fn blur(img: &[Vec3], g: &GBuffer, disc: &[u8], p: &BlurParams) -> Vec<Vec3>
 /// of them (`runs`), and one scratch image serves every pass.
 #[must_use]
 pub fn blur_n<const N: usize>(
+    imgs: [Vec<Vec3>; N],
+    g: &GBuffer,
+    disc: &[u8],
+    p: &BlurParams,
+) -> [Vec<Vec3>; N] {
+    blur_n_keyed(imgs, g, disc, p, None)
+}
+
+/// [`blur_n`] whose walks also stop where the key (ln lum A per pixel) moves from the
+/// centre's by more than [`BlurParams::a_diff`], when `keys` are given.
+#[must_use]
+pub fn blur_n_keyed<const N: usize>(
     mut imgs: [Vec<Vec3>; N],
     g: &GBuffer,
     disc: &[u8],
     p: &BlurParams,
+    keys: Option<&[f32]>,
 ) -> [Vec<Vec3>; N] {
     let w = g.width as usize;
     let r = p.radius as usize;
@@ -253,8 +295,16 @@ pub fn blur_n<const N: usize>(
         .collect();
     // How far the walk goes from each pixel, per direction: it stops before a step that
     // leaves the image, crosses a jump along its axis, or enters a pixel that sees nothing. Known before the sums, the taps need no tests.
-    let (right, left) = runs(g, disc, r, false);
-    let (down, up) = runs(g, disc, r, true);
+    let (mut right, mut left) = runs(g, disc, r, false);
+    let (mut down, mut up) = runs(g, disc, r, true);
+    if let Some(keys) = keys.filter(|_| p.a_diff > 0.0) {
+        stop_at_keys(
+            keys,
+            w,
+            p.a_diff,
+            [&mut right, &mut left, &mut down, &mut up],
+        );
+    }
     let phases = (p.phases as usize).clamp(1, MAX_PHASES);
     // A full walk covers every phase, but the Gaussian need not weigh them alike (at n = 8,
     // sigma 3, from 0.82 to 1.06: the 8 x 8 pattern of the sub-images shows through). Its

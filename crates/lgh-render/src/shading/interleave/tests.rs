@@ -252,3 +252,37 @@ fn the_precomputed_walks_equal_a_plain_walk() {
     close(&b2, &reference(&b));
     close(&c2, &reference(&c));
 }
+
+/// The stop on A: on one plane (no geometric edge) whose keys step by 1 at column 20, an
+/// image of 1 left of the step and 3 right of it keeps both values exactly where the walks
+/// stop at the step (a_diff 0.05), while without keys the walks cross it and mix them
+/// (the pixels beside the step move by more than 0.1); with keys but a_diff 0 the blur is
+/// the plain one.
+#[test]
+fn walks_stop_where_the_key_of_a_moves() {
+    let (w, h) = (40u32, 24u32);
+    let g = two_planes(w, h, w);
+    let p = BlurParams {
+        phases: 1,
+        ..BlurParams::defaults()
+    };
+    let disc = discontinuities(&g, &p);
+    let left = |i: usize| (i % w as usize) < 20;
+    let img: Vec<Vec3> = (0..g.len())
+        .map(|i| Vec3::splat(if left(i) { 1.0 } else { 3.0 }))
+        .collect();
+    let keys: Vec<f32> = (0..g.len())
+        .map(|i| if left(i) { 0.0 } else { 1.0 })
+        .collect();
+    let [stopped] = blur_n_keyed([img.clone()], &g, &disc, &p, Some(&keys));
+    for (i, v) in stopped.iter().enumerate() {
+        assert!((v.x - img[i].x).abs() <= 1e-6, "pixel {i}: {v}");
+    }
+    let [plain] = blur_n([img.clone()], &g, &disc, &p);
+    let beside = 10 * w as usize + 19;
+    assert!(plain[beside].x - img[beside].x > 0.1, "{}", plain[beside]);
+    let off = BlurParams { a_diff: 0.0, ..p };
+    let [unkeyed] = blur_n_keyed([img.clone()], &g, &disc, &off, Some(&keys));
+    let [plain_off] = blur_n([img], &g, &disc, &off);
+    assert_eq!(unkeyed, plain_off);
+}
