@@ -45,9 +45,9 @@ pub(crate) struct Geometry<'a> {
     pub size: (u32, u32),
 }
 
-/// Records the filter's passes into `batch` (timed as `name`) over the images `pair`
-/// (per pixel S with its guide in w, then U with the key of A in w), the input in `pair[0]`, the two buffers taking
-/// turns; returns the index in `pair` of the filtered images.
+/// Records the filter's passes into `batch` (timed as `name`) over the images `pair` (per
+/// pixel S with its guide in w, then U with the key of A in w), the input in `pair[0]`, the
+/// two buffers taking turns; returns the index in `pair` of the filtered images.
 ///
 /// # Errors
 /// The image exceeds one dispatch.
