@@ -26,8 +26,13 @@ fn accumulated(world: &World, method: lgh_render::Method, vpls: usize, n: u32) -
 /// asserted: N = 16 at most 0.4 of N = 1 (1 / sqrt(16) = 0.25, plus the reference's own
 /// noise). And `lgh` accumulated over N frames converges to the brute force accumulated over
 /// the same N (its estimate is unbiased, and the filters shrink as N grows): rel_rmse at
-/// N = 16 below 0.3 of N = 1 and below 0.08 (the quality issue's target; measured 0.37 ->
-/// 0.040 at 64x36 with 2000 VPLs a frame).
+/// N = 16 below 0.35 of N = 1 and below 0.08 (the quality issue's target). Measured at 64x36
+/// with 2000 VPLs a frame: 0.37 -> 0.040 when the bound was set at 0.3; since the ratio
+/// estimator's stops on A (docs/design.md, "A-trous filter") 0.156 -> 0.047 (0.155 -> 0.047
+/// with Embree's rays, 0.301 of N = 1): the single frame is far closer to the brute force,
+/// and the a-trous weight on A keeps a little more noise in the one pass left at N = 16
+/// (0.039 without it here; on the two rooms at 160x90 it lowers the 16-frame error, 0.039 ->
+/// 0.037). The bound on the ratio is 0.35 since.
 #[test]
 fn accumulation_converges() {
     let world = common::cornell_world();
@@ -52,7 +57,7 @@ fn accumulation_converges() {
     };
     let (l1, l16) = (lgh(1), lgh(16));
     eprintln!("lgh vs brute, both accumulated: N=1 {l1}, N=16 {l16}");
-    assert!(l16 < 0.3 * l1 && l16 < 0.08, "{l1} -> {l16}");
+    assert!(l16 < 0.35 * l1 && l16 < 0.08, "{l1} -> {l16}");
 }
 
 /// One accumulated frame is the plain render, and the mean is the same with 1 and 2
