@@ -148,4 +148,50 @@ impl GpuContext {
         *cache.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::clone(&up));
         Ok(up)
     }
+
+    /// Makes `buffer`, packed on the GPU for the G-buffer `g` (whose view is known:
+    /// [`crate::primary`]), the last uploaded G-buffer, so that the frame's passes read it
+    /// where it is. No copy of its planes is kept: a G-buffer whose view is unknown is never
+    /// taken for it.
+    pub(crate) fn adopt_gbuffer(&self, buffer: wgpu::Buffer, g: &GBuffer) {
+        let up = Arc::new(GpuGBuffer {
+            buffer,
+            planes: (g.width, g.height, Default::default()),
+            view: g.view,
+        });
+        *self
+            .gbuffers()
+            .last
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner) = Some(up);
+    }
+}
+
+/// The planes of `g` from the packed pixels `packed` (as [`pack_into`] packs them) and the
+/// emitted radiance `emission`, one `Vec4` each per pixel, reusing the planes' memory; `g`'s
+/// width, height and view are set by the caller.
+pub(crate) fn unpack(g: &mut GBuffer, packed: &[[glam::Vec4; 4]], emission: &[glam::Vec4]) {
+    fn fill<T: Send + Copy + Default>(
+        plane: &mut Vec<T>,
+        packed: &[[glam::Vec4; 4]],
+        f: impl Fn(&[glam::Vec4; 4]) -> T + Sync,
+    ) {
+        plane.resize(packed.len(), T::default());
+        plane
+            .par_iter_mut()
+            .zip(packed)
+            .for_each(|(out, p)| *out = f(p));
+    }
+    fill(&mut g.position, packed, |p| p[0].truncate());
+    fill(&mut g.normal, packed, |p| p[1].truncate());
+    fill(&mut g.geo_normal, packed, |p| p[2].truncate());
+    fill(&mut g.albedo, packed, |p| p[3].truncate());
+    fill(&mut g.depth, packed, |p| {
+        if p[0].w > 0.0 { p[3].w } else { f32::INFINITY }
+    });
+    g.emission.resize(packed.len(), Vec3::ZERO);
+    g.emission
+        .par_iter_mut()
+        .zip(emission)
+        .for_each(|(out, e)| *out = e.truncate());
 }

@@ -25,11 +25,13 @@ pub mod grid;
 pub mod interleave;
 pub mod pool;
 pub mod scene;
+pub mod surfaces;
 
 pub mod atrous;
 pub mod brute;
 pub mod direct;
 pub mod lgh;
+pub mod primary;
 pub mod ratio;
 pub mod rays;
 pub mod scan;

@@ -5,7 +5,10 @@
 use glam::{Vec3, Vec4};
 use obvhs::BvhBuildParams;
 
+use std::sync::Arc;
+
 use crate::context::{GpuContext, GpuError};
+use crate::surfaces::GpuSurfaces;
 
 /// Deepest BVH the traversal's stack holds (`STACK` in `shaders/bvh.wgsl`).
 pub const MAX_DEPTH: usize = 48;
@@ -33,15 +36,31 @@ pub struct GpuScene {
     pub tris: wgpu::Buffer,
     /// Number of triangles.
     pub triangles: usize,
+    /// The mesh's index of each triangle in leaf order.
+    order: Vec<u32>,
+    /// The triangles' shading data, materials and textures, uploaded on first use
+    /// ([`GpuScene::surfaces`]).
+    surfaces: std::sync::OnceLock<Result<Arc<GpuSurfaces>, GpuError>>,
 }
 
-/// The flattened BVH and triangles of `mesh` (CPU side, for upload and tests).
+/// A BVH flattened for the GPU (CPU side, for upload and tests).
+#[derive(Clone, Debug, Default)]
+pub struct FlatBvh {
+    /// The nodes, root first.
+    pub nodes: Vec<GpuNode>,
+    /// The triangles in leaf order, three corners each (w: 0).
+    pub tris: Vec<Vec4>,
+    /// The mesh's index of each triangle in leaf order.
+    pub order: Vec<u32>,
+}
+
+/// The flattened BVH and triangles of `mesh`.
 ///
 /// # Errors
 /// The BVH is deeper than the shader's stack ([`MAX_DEPTH`]).
-pub fn flatten(mesh: &lgh_scene::Mesh) -> Result<(Vec<GpuNode>, Vec<Vec4>), GpuError> {
+pub fn flatten(mesh: &lgh_scene::Mesh) -> Result<FlatBvh, GpuError> {
     if mesh.is_empty() {
-        return Ok((Vec::new(), Vec::new()));
+        return Ok(FlatBvh::default());
     }
     let boxes = lgh_render::world::accel::padded_boxes(mesh);
     let bvh = obvhs::bvh2::builder::build_bvh2(
@@ -70,7 +89,11 @@ pub fn flatten(mesh: &lgh_scene::Mesh) -> Result<(Vec<GpuNode>, Vec<Vec4>), GpuE
         .iter()
         .flat_map(|&i| mesh.vertices(i as usize).map(|v| v.extend(0.0)))
         .collect();
-    Ok((nodes, tris))
+    Ok(FlatBvh {
+        nodes,
+        tris,
+        order: bvh.primitive_indices,
+    })
 }
 
 /// Depth of the tree (the root alone: 1).
@@ -94,12 +117,31 @@ impl GpuScene {
     /// # Errors
     /// The BVH is too deep, or a buffer exceeds the adapter's limits.
     pub fn new(ctx: &GpuContext, mesh: &lgh_scene::Mesh) -> Result<Self, GpuError> {
-        let (nodes, tris) = flatten(mesh)?;
+        let FlatBvh { nodes, tris, order } = flatten(mesh)?;
         Ok(Self {
             nodes: ctx.storage("bvh nodes", &nodes)?,
             tris: ctx.storage("triangles", &tris)?,
             triangles: mesh.len(),
+            order,
+            surfaces: std::sync::OnceLock::new(),
         })
+    }
+
+    /// The surfaces of `world`'s triangles on the GPU (shading data in leaf order,
+    /// materials, textures: [`GpuSurfaces`]), uploaded on first use. `world` must be the one
+    /// this scene was uploaded for (the context's scene cache keys both by
+    /// [`lgh_render::World::geometry_id`]).
+    ///
+    /// # Errors
+    /// They do not fit the adapter's largest storage buffer.
+    pub fn surfaces(
+        &self,
+        ctx: &GpuContext,
+        world: &lgh_render::World,
+    ) -> Result<Arc<GpuSurfaces>, GpuError> {
+        self.surfaces
+            .get_or_init(|| GpuSurfaces::new(ctx, world, &self.order).map(Arc::new))
+            .clone()
     }
 }
 

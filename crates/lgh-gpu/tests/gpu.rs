@@ -22,6 +22,7 @@ fn every_shader_is_valid_wgsl() {
         lgh_gpu::interleave::discontinuities_source(),
         lgh_gpu::interleave::keys_source(),
         lgh_gpu::ratio::ratio_source(),
+        lgh_gpu::primary::source(),
     ]
     .into_iter()
     .chain(lgh_gpu::scan::sources())
@@ -49,7 +50,8 @@ fn the_bvh_flattens_with_every_triangle() {
     scene
         .finish(std::path::Path::new("<built-in cornell>"))
         .expect("scene");
-    let (nodes, tris) = lgh_gpu::scene::flatten(&scene.mesh).expect("flattens");
+    let lgh_gpu::scene::FlatBvh { nodes, tris, .. } =
+        lgh_gpu::scene::flatten(&scene.mesh).expect("flattens");
     assert_eq!(tris.len(), 3 * scene.mesh.len());
     assert!(!nodes.is_empty());
 }
@@ -176,7 +178,8 @@ fn occluded_twin(
 fn the_flattened_bvh_answers_as_the_cpu_tracer() {
     for rel in SCENES {
         let w = world(rel);
-        let (nodes, tris) = lgh_gpu::scene::flatten(&w.scene.mesh).expect("flattens");
+        let lgh_gpu::scene::FlatBvh { nodes, tris, .. } =
+            lgh_gpu::scene::flatten(&w.scene.mesh).expect("flattens");
         let (lo, hi) = w.scene.mesh.bounds();
         let mut rng = lgh_core::rng::Rng::new(&[5]);
         let mut wrong = 0;

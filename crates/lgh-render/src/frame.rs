@@ -135,14 +135,19 @@ pub fn render_frame_with(
         .map(|r| r.grown(crate::region::guard_band(s), w, h));
     let g = t.time("gbuffer", || {
         let mut g = memory.gbuffer.take().unwrap_or_default();
-        if !g.shows(world, &camera, w, h) {
+        if !g.shows(world, &camera, w, h)
+            && !s
+                .method
+                .get()
+                .trace_gbuffer(world, &camera, (w, h), &mut g)?
+        {
             g.render_into(world, &camera, w, h);
         }
         if let Some(r) = &keep {
             g.clear_outside(r);
         }
-        g
-    });
+        Ok::<_, RenderError>(g)
+    })?;
     let all_reflected = s.method.illumination() == Illumination::AllReflected;
     let vpls = if all_reflected {
         VplSet::default()

@@ -77,6 +77,15 @@ impl CameraFrame {
         Self { jitter, ..self }
     }
 
+    /// What [`CameraFrame::direction`] and [`CameraFrame::sample_point`] compute from, for
+    /// a backend that generates the same primary rays itself (lgh-gpu's G-buffer kernel):
+    /// the unit right and up vectors, the image-plane half-extents at unit distance
+    /// (`scale`: tan(fov_x / 2), tan(fov_y / 2)), the image size in pixels and the jitter.
+    #[must_use]
+    pub fn ray_basis(&self) -> (Vec3, Vec3, Vec2, Vec2, Vec2) {
+        (self.right, self.up, self.scale, self.size, self.jitter)
+    }
+
     /// The sample point of pixel (x, y): its centre moved by the jitter.
     #[inline]
     #[must_use]

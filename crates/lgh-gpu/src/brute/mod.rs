@@ -73,6 +73,16 @@ impl IndirectMethod for GpuBrute {
         crate::direct::method_direct(world, g, s)
     }
 
+    fn trace_gbuffer(
+        &self,
+        world: &lgh_render::World,
+        camera: &lgh_scene::camera::CameraFrame,
+        size: (u32, u32),
+        g: &mut GBuffer,
+    ) -> Result<bool, RenderError> {
+        crate::primary::method_gbuffer(world, camera, size, g)
+    }
+
     fn render(&self, i: &MethodInputs, _: &mut FrameMemory) -> Result<MethodOutput, RenderError> {
         let fail = |e: GpuError| RenderError::Backend(e.to_string());
         let ctx = GpuContext::shared().map_err(fail)?;

@@ -77,6 +77,16 @@ impl IndirectMethod for GpuLgh {
         crate::direct::method_direct(world, g, s)
     }
 
+    fn trace_gbuffer(
+        &self,
+        world: &lgh_render::World,
+        camera: &lgh_scene::camera::CameraFrame,
+        size: (u32, u32),
+        g: &mut GBuffer,
+    ) -> Result<bool, RenderError> {
+        crate::primary::method_gbuffer(world, camera, size, g)
+    }
+
     fn render(
         &self,
         inputs: &MethodInputs,

@@ -1,7 +1,7 @@
-// Any-hit traversal of a binary BVH (obvhs's BVH2, flattened on the CPU: an inner node's
-// children are nodes[first] and nodes[first + 1], a leaf holds `count` triangles from
-// `first` in leaf order) and the Moller-Trumbore triangle test. Included by the kernels
-// that trace shadow rays.
+// Traversal of a binary BVH (obvhs's BVH2, flattened on the CPU: an inner node's children
+// are nodes[first] and nodes[first + 1], a leaf holds `count` triangles from `first` in leaf
+// order) with the Moller-Trumbore triangle test: any hit (shadow rays) or the closest hit
+// (primary rays). Included by the kernels that trace rays.
 
 struct Node {
     lo: vec3<f32>,
@@ -20,16 +20,16 @@ fn box_entry(lo: vec3<f32>, hi: vec3<f32>, o: vec3<f32>, inv_d: vec3<f32>, t_max
     return select(3.4e38, tn, tn <= tf);
 }
 
-// Moller-Trumbore: the distance to triangle t if the ray hits it within (0, t_max), else a
-// negative value.
-fn triangle_hit(t: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> f32 {
+// Moller-Trumbore: (t, b1, b2) of the hit of triangle t within (0, t_max), with b1 and b2
+// the barycentric weights of its second and third corners; t is negative for a miss.
+fn triangle_hit(t: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> vec3<f32> {
     let a = tris[3u * t].xyz;
     let e1 = tris[3u * t + 1u].xyz - a;
     let e2 = tris[3u * t + 2u].xyz - a;
     let p = cross(d, e2);
     let det = dot(e1, p);
     if (abs(det) < 1e-12) {
-        return -1.0;
+        return vec3<f32>(-1.0, 0.0, 0.0);
     }
     let inv = 1.0 / det;
     let s = o - a;
@@ -38,16 +38,27 @@ fn triangle_hit(t: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> f32 {
     let v = dot(d, q) * inv;
     let tt = dot(e2, q) * inv;
     let inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0 && tt > 0.0 && tt < t_max;
-    return select(-1.0, tt, inside);
+    return vec3<f32>(select(-1.0, tt, inside), u, v);
 }
 
 const STACK: u32 = 48u;
 const NONE: u32 = 0xffffffffu;
 
-// True if any triangle lies on o + t d, t in (0, t_max).
-fn occluded(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
+// A ray's hit: distance t, the triangle (in leaf order; NONE for a miss) and the
+// barycentric weights b1, b2 of its second and third corners.
+struct Hit {
+    t: f32,
+    tri: u32,
+    b1: f32,
+    b2: f32,
+}
+
+// The triangles on o + t d, t in (0, t_max): the nearest one, or with `any` the first one
+// found (a shadow ray needs no more).
+fn trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any: bool) -> Hit {
+    var best = Hit(t_max, NONE, 0.0, 0.0);
     if (arrayLength(&nodes) == 0u || !(t_max > 0.0)) {
-        return false;
+        return best;
     }
     // Zero components become tiny ones: WGSL leaves x / 0 undefined.
     let inv_d = 1.0 / select(d, vec3<f32>(1e-20), abs(d) < vec3<f32>(1e-20));
@@ -55,7 +66,7 @@ fn occluded(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
     var top = 0u;
     var node = 0u;
     if (box_entry(nodes[0].lo, nodes[0].hi, o, inv_d, t_max) > 3.0e38) {
-        return false;
+        return best;
     }
     loop {
         let n = nodes[node];
@@ -63,15 +74,19 @@ fn occluded(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
         var next = NONE;
         if (n.count > 0u) {
             for (var i = 0u; i < n.count; i++) {
-                if (triangle_hit(n.first + i, o, d, t_max) > 0.0) {
-                    return true;
+                let h = triangle_hit(n.first + i, o, d, best.t);
+                if (h.x > 0.0) {
+                    best = Hit(h.x, n.first + i, h.y, h.z);
+                    if (any) {
+                        return best;
+                    }
                 }
             }
         } else {
             let a = n.first;
             let b = n.first + 1u;
-            let ta = box_entry(nodes[a].lo, nodes[a].hi, o, inv_d, t_max);
-            let tb = box_entry(nodes[b].lo, nodes[b].hi, o, inv_d, t_max);
+            let ta = box_entry(nodes[a].lo, nodes[a].hi, o, inv_d, best.t);
+            let tb = box_entry(nodes[b].lo, nodes[b].hi, o, inv_d, best.t);
             let hit_a = ta < 3.0e38;
             let hit_b = tb < 3.0e38;
             if (hit_a && hit_b) {
@@ -95,7 +110,12 @@ fn occluded(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
         }
         node = next;
     }
-    return false;
+    return best;
+}
+
+// True if any triangle lies on o + t d, t in (0, t_max).
+fn occluded(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
+    return trace(o, d, t_max, true).tri != NONE;
 }
 
 // World::offset: p moved off its surface (geometric normal n) by eps towards `towards`.

@@ -187,6 +187,22 @@ pub trait IndirectMethod: Sync + Send {
     ) -> Result<Option<crate::direct::DirectOutput>, RenderError> {
         Ok(None)
     }
+    /// Traces the frame's primary rays into `g` (`world` seen by `camera` at `width` x
+    /// `height`, every plane and [`GBuffer::view`] set as [`GBuffer::render_into`] sets
+    /// them) on this method's own backend and returns `Ok(true)`, or returns `Ok(false)`,
+    /// the default, for the CPU's pass. lgh-gpu's methods trace them on the GPU.
+    ///
+    /// # Errors
+    /// The backend failed.
+    fn trace_gbuffer(
+        &self,
+        _world: &World,
+        _camera: &CameraFrame,
+        _size: (u32, u32),
+        _g: &mut GBuffer,
+    ) -> Result<bool, RenderError> {
+        Ok(false)
+    }
 }
 
 /// A registered method: a handle to a `'static` [`IndirectMethod`], compared by name.

@@ -1,0 +1,150 @@
+//! Primary rays into the G-buffer on the GPU (`shaders/primary.wgsl`): one ray per pixel
+//! through the BVH in compute, the closest hit's surface from [`crate::surfaces`], written
+//! in the packed layout the frame's other passes read ([`crate::gbuffer`]). The packed
+//! buffer stays on the GPU as the context's G-buffer, and is read back into the CPU's
+//! planes for the passes that still run there (edge resolve, composite, TAA).
+//!
+//! The rays are the CPU's (`CameraFrame::direction`); the triangle test is Moller-Trumbore
+//! in `f32` where the CPU's tracer is obvhs's or Embree's, so a ray that grazes a shared
+//! edge may take the other triangle, and positions differ in the last bits.
+
+use glam::Vec4;
+use lgh_render::World;
+use lgh_render::passes::gbuffer::GBuffer;
+use lgh_scene::camera::CameraFrame;
+
+use crate::batch::Batch;
+use crate::context::{GpuContext, GpuError};
+use crate::pool::Lease;
+
+/// `Params` of `shaders/primary.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    origin: [f32; 3],
+    width: u32,
+    forward: [f32; 3],
+    height: u32,
+    right: [f32; 3],
+    jitter_x: f32,
+    up: [f32; 3],
+    jitter_y: f32,
+    scale: [f32; 2],
+    size: [f32; 2],
+}
+
+/// Bytes per pixel of the packed G-buffer and of the emission.
+const PIXEL_BYTES: u64 = 64;
+const EMISSION_BYTES: u64 = 16;
+
+/// The WGSL source of the kernel (with the surface evaluation and the BVH traversal).
+#[must_use]
+pub fn source() -> String {
+    crate::kernel(&[
+        include_str!("../shaders/primary.wgsl"),
+        include_str!("../shaders/surface.wgsl"),
+        include_str!("../shaders/bvh.wgsl"),
+    ])
+}
+
+/// Traces `g`'s primary rays for `world` seen by `camera` at `width` x `height` on the GPU
+/// and fills its planes, as `GBuffer::render_into` does on the CPU; the packed G-buffer
+/// stays on the GPU for the frame's passes ([`GpuContext::gbuffer`] returns it for `g`).
+///
+/// # Errors
+/// The scene or the image does not fit the adapter's limits, or the GPU failed.
+pub fn trace_gbuffer(
+    ctx: &GpuContext,
+    world: &World,
+    camera: &CameraFrame,
+    width: u32,
+    height: u32,
+    g: &mut GBuffer,
+) -> Result<(), GpuError> {
+    let n = width as usize * height as usize;
+    let scene = ctx.scene(world)?;
+    let surfaces = scene.surfaces(ctx, world)?;
+    let bytes = (n as u64 * PIXEL_BYTES).max(PIXEL_BYTES);
+    if bytes > ctx.limits.max_storage_buffer_binding_size {
+        return Err(GpuError::TooLarge(format!(
+            "the G-buffer: {} MB exceed the adapter's largest storage buffer ({} MB)",
+            bytes >> 20,
+            ctx.limits.max_storage_buffer_binding_size >> 20
+        )));
+    }
+    let packed = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("g-buffer"),
+        size: bytes,
+        usage: GpuContext::STORAGE,
+        mapped_at_creation: false,
+    });
+    let emission: Lease<'_> = ctx.output("emission", (n as u64 * EMISSION_BYTES).max(16))?;
+    let (right, up, scale, size, jitter) = camera.ray_basis();
+    let params = ctx.uniform(
+        "primary params",
+        &Params {
+            origin: camera.origin.into(),
+            width,
+            forward: camera.forward.into(),
+            height,
+            right: right.into(),
+            jitter_x: jitter.x,
+            up: up.into(),
+            jitter_y: jitter.y,
+            scale: scale.into(),
+            size: size.into(),
+        },
+    );
+    let pipeline = ctx.pipeline("primary", source);
+    let bind = ctx.bind_group(
+        &pipeline,
+        vec![
+            params.as_entire_binding(),
+            scene.nodes.as_entire_binding(),
+            scene.tris.as_entire_binding(),
+            surfaces.shade.as_entire_binding(),
+            surfaces.materials.as_entire_binding(),
+            surfaces.texels.as_entire_binding(),
+            packed.as_entire_binding(),
+            emission.binding(),
+        ],
+    );
+    let mut batch = Batch::new(ctx);
+    batch.dispatch("primary rays", &pipeline, &bind, n)?;
+    batch.read(&packed, bytes)?;
+    batch.read(emission.buffer(), emission.bytes())?;
+    let (reads, _) = batch.finish()?;
+    let [pixels, emitted] = reads.as_slice() else {
+        return Err(GpuError::Failed(
+            "the G-buffer's read-back is missing".into(),
+        ));
+    };
+    let pixels: &[[Vec4; 4]] = bytemuck::cast_slice(pixels);
+    let emitted: &[Vec4] = bytemuck::cast_slice(emitted);
+    crate::gbuffer::unpack(g, &pixels[..n], &emitted[..n]);
+    (g.width, g.height) = (width, height);
+    g.view = Some((world.geometry_id(), *camera));
+    ctx.adopt_gbuffer(packed, g);
+    Ok(())
+}
+
+/// [`trace_gbuffer`] for a GPU method's [`lgh_render::methods::IndirectMethod::trace_gbuffer`]
+/// on the process's context: `Ok(false)` (the CPU traces them) where the scene's surfaces
+/// or the image do not fit the adapter's buffers.
+///
+/// # Errors
+/// No adapter, or the GPU failed.
+pub fn method_gbuffer(
+    world: &World,
+    camera: &CameraFrame,
+    (width, height): (u32, u32),
+    g: &mut GBuffer,
+) -> Result<bool, lgh_render::settings::RenderError> {
+    let fail = |e: GpuError| lgh_render::settings::RenderError::Backend(e.to_string());
+    let ctx = GpuContext::shared().map_err(fail)?;
+    match trace_gbuffer(ctx, world, camera, width, height, g) {
+        Ok(()) => Ok(true),
+        Err(GpuError::TooLarge(_)) => Ok(false),
+        Err(e) => Err(fail(e)),
+    }
+}

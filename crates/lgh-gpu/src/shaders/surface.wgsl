@@ -1,0 +1,119 @@
+// The surface at a ray's hit, as lgh-render's World::surface computes it: the geometric
+// normal facing the ray, the interpolated shading normal (the geometric one where a corner
+// has none), the albedo (factor x bilinear texture, clamped to [0, 1]) and the one-sided
+// emission. Needs the bindings `shade`, `materials` and `texels` (lgh_gpu::primary).
+
+// One triangle's shading data, in the BVH's leaf order: the unit face normal (w: the
+// material's index, as bits) and the corners' normals and texture coordinates.
+struct TriShade {
+    face: vec4<f32>,
+    n0: vec4<f32>,  // w: u0
+    n1: vec4<f32>,  // w: v0
+    n2: vec4<f32>,  // w: u1
+    uv: vec4<f32>,  // v1, u2, v2, unused
+}
+
+// A material: albedo factor (w: the texture's index, as bits; NO_TEXTURE for none) and
+// emitted radiance.
+struct Material {
+    albedo: vec4<f32>,
+    emission: vec4<f32>,
+}
+
+const NO_TEXTURE: u32 = 0xffffffffu;
+// `texels` holds the sRGB decoding table (256 floats, as bits), then a header per texture
+// (first texel, width, height, unused), then the texels (8-bit sRGB, r | g << 8 | b << 16).
+const TEXTURE_HEADERS: u32 = 256u;
+
+struct Surface {
+    position: vec3<f32>,
+    geo_normal: vec3<f32>,
+    normal: vec3<f32>,
+    albedo: vec3<f32>,
+    emission: vec3<f32>,
+}
+
+// A texel decoded to linear RGB.
+fn texel(at: u32) -> vec3<f32> {
+    let t = texels[at];
+    return vec3<f32>(
+        bitcast<f32>(texels[t & 0xffu]),
+        bitcast<f32>(texels[(t >> 8u) & 0xffu]),
+        bitcast<f32>(texels[(t >> 16u) & 0xffu]),
+    );
+}
+
+// Rust's f32::rem_euclid(x, 1.0).
+fn wrap01(x: f32) -> f32 {
+    let r = x % 1.0;
+    return select(r, r + 1.0, r < 0.0);
+}
+
+// glam's Vec3::lerp.
+fn lerp3(a: vec3<f32>, b: vec3<f32>, s: f32) -> vec3<f32> {
+    return a * (1.0 - s) + b * s;
+}
+
+// lgh-scene's Texture::sample: bilinear, wrapping at the borders, v up.
+fn sample_texture(k: u32, uv: vec2<f32>) -> vec3<f32> {
+    let head = TEXTURE_HEADERS + 4u * k;
+    let first = texels[head];
+    let w = i32(texels[head + 1u]);
+    let h = i32(texels[head + 2u]);
+    let x = wrap01(uv.x) * f32(w) - 0.5;
+    let y = (1.0 - wrap01(uv.y)) * f32(h) - 0.5;
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = x - x0;
+    let fy = y - y0;
+    let xa = ((i32(x0) % w) + w) % w;
+    let xb = ((i32(x0) + 1) % w + w) % w;
+    let ya = ((i32(y0) % h) + h) % h;
+    let yb = ((i32(y0) + 1) % h + h) % h;
+    let top = lerp3(texel(first + u32(ya * w + xa)), texel(first + u32(ya * w + xb)), fx);
+    let bottom = lerp3(texel(first + u32(yb * w + xa)), texel(first + u32(yb * w + xb)), fx);
+    return lerp3(top, bottom, fy);
+}
+
+// glam's normalize_or_zero.
+fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
+    let len = sqrt(dot(v, v));
+    return select(vec3<f32>(0.0), v * (1.0 / len), len > 0.0 && len < 3.0e38);
+}
+
+// The surface that the ray o + t d (d of unit length) meets at `hit` (a hit, not a miss).
+fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
+    let s = shade[hit.tri];
+    let b1 = hit.b1;
+    let b2 = hit.b2;
+    let b0 = 1.0 - b1 - b2;
+    let front = dot(s.face.xyz, d) < 0.0;
+    let geo = select(-s.face.xyz, s.face.xyz, front);
+    var normal = vec3<f32>(0.0);
+    let zero = vec3<f32>(0.0);
+    if (any(s.n0.xyz != zero) && any(s.n1.xyz != zero) && any(s.n2.xyz != zero)) {
+        normal = normalize_or_zero(s.n0.xyz * b0 + s.n1.xyz * b1 + s.n2.xyz * b2);
+    }
+    if (all(normal == zero)) {
+        normal = geo;
+    } else if (dot(normal, geo) < 0.0) {
+        normal = -normal;
+    }
+    let uv = vec2<f32>(s.n0.w, s.n1.w) * b0 + vec2<f32>(s.n2.w, s.uv.x) * b1 + s.uv.yz * b2;
+    let m = materials[bitcast<u32>(s.face.w)];
+    let k = bitcast<u32>(m.albedo.w);
+    var t = vec3<f32>(1.0);
+    if (k != NO_TEXTURE) {
+        t = sample_texture(k, uv);
+        if (any(abs(t) > vec3<f32>(3.4e38)) || any(t != t)) {
+            t = vec3<f32>(0.0);
+        }
+    }
+    return Surface(
+        o + d * hit.t,
+        geo,
+        normal,
+        clamp(m.albedo.xyz * t, vec3<f32>(0.0), vec3<f32>(1.0)),
+        select(vec3<f32>(0.0), m.emission.xyz, front),
+    );
+}
