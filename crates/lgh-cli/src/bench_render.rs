@@ -93,7 +93,12 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
     let mut rows = Vec::new();
     for &n in &args.vpls {
         let t = Instant::now();
-        let set = generate_vpls(&world, n, 3, 0, PathNumbers::Sobol);
+        let set = match args.device {
+            Device::Cpu => generate_vpls(&world, n, 3, 0, PathNumbers::Sobol),
+            Device::Gpu => {
+                lgh_gpu::vpls::generate_vpls(lgh_gpu::GpuContext::shared()?, &world, n, 3, 0)?
+            }
+        };
         let vpl_ms = t.elapsed().as_secs_f64() * 1e3;
         let mut memory = FrameMemory::default();
         let mut per_k = serde_json::Map::new();

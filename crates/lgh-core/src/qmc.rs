@@ -47,7 +47,22 @@ impl Sampler for Rng {
 }
 
 /// Points per scrambled block (the longest sequence `sobol_burley` supports).
-const BLOCK: u64 = 1 << 16;
+pub const BLOCK: u64 = 1 << 16;
+
+/// The scrambling seed of block `block` of the point set of `seed` ([`PathSampler`]).
+#[inline]
+#[must_use]
+pub fn block_seed(seed: u64, block: u64) -> u64 {
+    hash(&[seed, block, 0x50b0])
+}
+
+/// The seed of the 4D sequence of dimension group `group` in a block of seed `block_seed`
+/// (`sobol_burley::sample_4d`'s seed): what a backend that draws the same numbers needs.
+#[inline]
+#[must_use]
+pub fn group_seed(block_seed: u64, group: u32) -> u32 {
+    hash(&[block_seed, u64::from(group)]) as u32
+}
 
 /// The Owen-scrambled Sobol point of one light path: its dimensions, four at a time.
 #[derive(Clone, Debug)]
@@ -69,7 +84,7 @@ impl PathSampler {
     pub fn new(seed: u64, path: u64) -> Self {
         Self {
             index: (path % BLOCK) as u32,
-            block_seed: hash(&[seed, path / BLOCK, 0x50b0]),
+            block_seed: block_seed(seed, path / BLOCK),
             group: 0,
             values: [0.0; 4],
             used: 4,
@@ -81,7 +96,7 @@ impl Sampler for PathSampler {
     #[inline]
     fn next_f32(&mut self) -> f32 {
         if self.used == 4 {
-            let seed = hash(&[self.block_seed, u64::from(self.group)]) as u32;
+            let seed = group_seed(self.block_seed, self.group);
             self.values = sobol_burley::sample_4d(self.index, 0, seed);
             self.group += 1;
             self.used = 0;
@@ -90,6 +105,17 @@ impl Sampler for PathSampler {
         self.used += 1;
         v
     }
+}
+
+/// The direction vectors of the first four Sobol dimensions that [`PathSampler`]'s 4D groups
+/// use, bit-reversed as `sobol_burley` keeps them: entry b holds, per dimension, what bit b
+/// (from the top) of the bit-reversed, index-scrambled point index contributes. A backend
+/// that draws the same numbers (lgh-gpu) XORs these over the set bits of the top 16.
+#[must_use]
+pub fn direction_vectors_4d() -> [[u32; 4]; 16] {
+    std::array::from_fn(|b| {
+        std::array::from_fn(|d| sobol_burley::parts::sobol_rev(0x8000_0000 >> b, d as u32))
+    })
 }
 
 /// Point `index` of the 2D Owen-scrambled Sobol set of `seed` (the first two dimensions of

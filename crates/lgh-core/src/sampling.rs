@@ -150,6 +150,13 @@ impl Distribution1D {
         self.total
     }
 
+    /// The weights of items 0 to `i` over the total: the cumulative table a backend
+    /// without `f64` keeps as two `f32`s (lgh-gpu's light table).
+    #[must_use]
+    pub fn cumulative(&self, i: usize) -> f64 {
+        self.cdf[i] / self.total
+    }
+
     /// Probability of item `i`.
     #[must_use]
     pub fn pmf(&self, i: usize) -> f32 {

@@ -26,6 +26,7 @@ pub mod interleave;
 pub mod pool;
 pub mod scene;
 pub mod surfaces;
+pub mod vpls;
 
 pub mod atrous;
 pub mod brute;

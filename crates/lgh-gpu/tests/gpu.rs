@@ -26,6 +26,7 @@ fn every_shader_is_valid_wgsl() {
     ]
     .into_iter()
     .chain(lgh_gpu::scan::sources())
+    .chain(lgh_gpu::vpls::sources())
     .chain(lgh_gpu::grid::sources().into_iter().map(|(_, s)| s))
     {
         validate(&source);

@@ -153,8 +153,11 @@ pub fn render_frame_with(
         VplSet::default()
     } else {
         t.time("vpl_generation", || {
-            generate_vpls(world, s.vpls, s.bounces, s.seed, s.path_numbers)
-        })
+            Ok::<_, RenderError>(match s.method.get().generate_vpls(world, s)? {
+                Some(set) => set,
+                None => generate_vpls(world, s.vpls, s.bounces, s.seed, s.path_numbers),
+            })
+        })?
     };
     // The indirect component alone does not need the direct pass (about a third of a
     // 1280x720 frame), and a path tracer computes it itself.

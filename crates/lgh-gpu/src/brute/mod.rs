@@ -83,6 +83,14 @@ impl IndirectMethod for GpuBrute {
         crate::primary::method_gbuffer(world, camera, size, g)
     }
 
+    fn generate_vpls(
+        &self,
+        world: &lgh_render::World,
+        s: &lgh_render::RenderSettings,
+    ) -> Result<Option<lgh_render::passes::vpl_gen::VplSet>, RenderError> {
+        crate::vpls::method_vpls(world, s)
+    }
+
     fn render(&self, i: &MethodInputs, _: &mut FrameMemory) -> Result<MethodOutput, RenderError> {
         let fail = |e: GpuError| RenderError::Backend(e.to_string());
         let ctx = GpuContext::shared().map_err(fail)?;

@@ -87,6 +87,14 @@ impl IndirectMethod for GpuLgh {
         crate::primary::method_gbuffer(world, camera, size, g)
     }
 
+    fn generate_vpls(
+        &self,
+        world: &lgh_render::World,
+        s: &lgh_render::RenderSettings,
+    ) -> Result<Option<lgh_render::passes::vpl_gen::VplSet>, RenderError> {
+        crate::vpls::method_vpls(world, s)
+    }
+
     fn render(
         &self,
         inputs: &MethodInputs,

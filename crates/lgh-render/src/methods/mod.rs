@@ -187,6 +187,19 @@ pub trait IndirectMethod: Sync + Send {
     ) -> Result<Option<crate::direct::DirectOutput>, RenderError> {
         Ok(None)
     }
+    /// The frame's VPLs (`generate_vpls(world, s.vpls, s.bounces, s.seed,
+    /// s.path_numbers)`'s set) generated on this method's own backend, or `Ok(None)`, the
+    /// default, for the CPU's pass. lgh-gpu's methods trace the light paths on the GPU.
+    ///
+    /// # Errors
+    /// The backend failed.
+    fn generate_vpls(
+        &self,
+        _world: &World,
+        _s: &RenderSettings,
+    ) -> Result<Option<crate::passes::vpl_gen::VplSet>, RenderError> {
+        Ok(None)
+    }
     /// Traces the frame's primary rays into `g` (`world` seen by `camera` at `width` x
     /// `height`, every plane and [`GBuffer::view`] set as [`GBuffer::render_into`] sets
     /// them) on this method's own backend and returns `Ok(true)`, or returns `Ok(false)`,

@@ -53,6 +53,20 @@ pub struct VplSet {
     pub paths: u64,
 }
 
+/// The seed of the Sobol point set of the light paths of frame seed `seed`
+/// ([`PathNumbers::Sobol`]: path k uses `PathSampler::new(path_seed(seed), k)`).
+#[must_use]
+pub fn path_seed(seed: u64) -> u64 {
+    hash(&[seed, STREAM_VPL])
+}
+
+/// The most light paths traced for `target` VPLs: `64 target + 10^6`, a cap for scenes where
+/// light escapes.
+#[must_use]
+pub fn max_paths(target: usize) -> u64 {
+    64 * target as u64 + 1_000_000
+}
+
 /// Traces light paths until at least `target` VPLs exist (whole paths only, so the count may
 /// exceed it by up to `bounces - 1`), or until `64 target + 10^6` paths have been traced in a
 /// scene where light escapes. Deterministic for a given `seed`, whatever the thread count.
@@ -72,12 +86,12 @@ pub fn generate_vpls(
     numbers: PathNumbers,
 ) -> VplSet {
     let mut vpls = Vpls::with_capacity(target + bounces as usize);
-    let max_paths = 64 * target as u64 + 1_000_000;
+    let max_paths = max_paths(target);
     let mut paths = 0u64;
     if target == 0 || bounces == 0 || world.lights.emits_nothing() {
         return VplSet { vpls, paths };
     }
-    let sobol_seed = hash(&[seed, STREAM_VPL]);
+    let sobol_seed = path_seed(seed);
     let path = |k: u64, out: &mut Vpls| match numbers {
         PathNumbers::Sobol => trace_path(world, bounces, &mut PathSampler::new(sobol_seed, k), out),
         PathNumbers::Random => {

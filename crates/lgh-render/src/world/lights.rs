@@ -161,6 +161,14 @@ impl LightSet {
         }
     }
 
+    /// The lights' distribution by power ([`LightSet::sample_emission`]'s choice, over
+    /// the punctual lights then the emitters), `None` if nothing emits; for backends that
+    /// start light paths elsewhere.
+    #[must_use]
+    pub fn power_distribution(&self) -> Option<&Distribution1D> {
+        self.by_power.as_ref()
+    }
+
     /// The emitters' distribution by radiance x area ([`LightSet::sample_emitter`]'s
     /// first choice), `None` without emitters; for backends that sample them elsewhere.
     #[must_use]

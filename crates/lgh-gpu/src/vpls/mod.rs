@@ -1,0 +1,239 @@
+//! VPL generation by light tracing on the GPU (Keller 1997, "Instant Radiosity"; LGH 2019
+//! section 4): lgh-render's `generate_vpls` with its Sobol path numbers
+//! ([`lgh_render::passes::vpl_gen::PathNumbers::Sobol`]), one invocation per light path
+//! (`shaders/vpl_paths.wgsl`: the emission choice of `shaders/emission.wgsl`, the numbers of
+//! `shaders/sobol.wgsl`, closest hits and surfaces as the G-buffer's).
+//!
+//! The same VPL set as the CPU's: path k draws the CPU's numbers bit for bit, and the set
+//! is the paths in order of k up to the first that brings the VPLs to the target. Paths go
+//! in batches; each batch's counts are prefix-summed ([`crate::scan`]) and its kept paths'
+//! VPLs written in order (`shaders/vpl_compact.wgsl`), so the result does not depend on
+//! scheduling. The warps' `cos`, `sin` and `sqrt` are the GPU's, so a position may differ
+//! from the CPU's in its last bits, and a path that grazes an edge may take another turn.
+
+pub mod tables;
+
+use glam::Vec4;
+use lgh_core::vpl::Vpls;
+use lgh_render::World;
+use lgh_render::passes::vpl_gen::{PathNumbers, VplSet, max_paths, path_seed};
+
+use crate::batch::Batch;
+use crate::context::{GpuContext, GpuError};
+
+/// The most paths of one batch (as the CPU's).
+const MAX_BATCH: u64 = 1 << 20;
+/// The fewest.
+const MIN_BATCH: u64 = 1024;
+/// Bytes of a VPL on the GPU (three `vec4`s).
+const VPL_BYTES: u64 = 48;
+
+/// `Params` of `shaders/vpl_paths.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct PathParams {
+    centre: [f32; 3],
+    radius: f32,
+    first: u32,
+    paths: u32,
+    bounces: u32,
+    lights: u32,
+    ray_eps: f32,
+    block0: u32,
+    groups: u32,
+    pad: u32,
+    seeds: [[u32; 4]; tables::MAX_SEEDS / 4],
+}
+
+/// `Params` of `shaders/vpl_compact.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CompactParams {
+    paths: u32,
+    bounces: u32,
+    done: u32,
+    target: u32,
+}
+
+/// The WGSL sources of the light-path kernel and the compaction.
+#[must_use]
+pub fn sources() -> [String; 2] {
+    [
+        crate::kernel(&[
+            include_str!("../shaders/vpl_paths.wgsl"),
+            include_str!("../shaders/emission.wgsl"),
+            include_str!("../shaders/sobol.wgsl"),
+            include_str!("../shaders/surface.wgsl"),
+            include_str!("../shaders/bvh.wgsl"),
+        ]),
+        crate::kernel(&[include_str!("../shaders/vpl_compact.wgsl")]),
+    ]
+}
+
+/// lgh-render's `generate_vpls(world, target, bounces, seed, PathNumbers::Sobol)` on the
+/// GPU: at least `target` VPLs (whole paths), fluxes divided by the number of paths.
+///
+/// # Errors
+/// The scene or the VPLs do not fit the adapter's buffers, or the GPU failed.
+pub fn generate_vpls(
+    ctx: &GpuContext,
+    world: &World,
+    target: usize,
+    bounces: u32,
+    seed: u64,
+) -> Result<VplSet, GpuError> {
+    let Some(table) = tables::tables(world).filter(|_| target > 0 && bounces > 0) else {
+        return Ok(VplSet::default());
+    };
+    let too_large = || GpuError::TooLarge(format!("{target} VPLs"));
+    let target32 = u32::try_from(target).map_err(|_| too_large())?;
+    let scene = ctx.scene(world)?;
+    let surfaces = scene.surfaces(ctx, world)?;
+    let lights = ctx.upload("light tables", &table)?;
+    let limit = ctx.limits.max_storage_buffer_binding_size;
+    let b = u64::from(bounces);
+    let groups = tables::groups(bounces);
+    let max_batch = MAX_BATCH
+        .min(tables::max_batch_for_seeds(groups))
+        .min(limit / (b * VPL_BYTES))
+        .max(1);
+    let out_bytes = (target as u64 + b) * VPL_BYTES;
+    if out_bytes > limit {
+        return Err(too_large());
+    }
+    let out = ctx.output("vpls", out_bytes)?;
+    let status = ctx.output("vpl status", 16)?;
+    let [paths_src, compact_src] = sources();
+    let paths_kernel = ctx.pipeline("vpl paths", || paths_src);
+    let compact_kernel = ctx.pipeline("vpl compact", || compact_src);
+    let set_seed = path_seed(seed);
+    let cap = max_paths(target);
+    let (mut paths, mut done) = (0u64, 0u64);
+    while paths < cap {
+        // As the CPU plans its batches: the first as if every path left `bounces` VPLs,
+        // the next from the VPLs per path seen so far, plus 5%.
+        let missing = (target as u64 - done) as f64;
+        let planned = if paths == 0 {
+            missing / b as f64
+        } else {
+            1.05 * missing * paths as f64 / done.max(1) as f64
+        };
+        let n = (planned.ceil() as u64)
+            .clamp(MIN_BATCH, max_batch)
+            .min(cap - paths);
+        let mut seeds = [[0u32; 4]; tables::MAX_SEEDS / 4];
+        for (i, s) in tables::seeds(set_seed, paths, n, groups)
+            .into_iter()
+            .enumerate()
+        {
+            seeds[i / 4][i % 4] = s;
+        }
+        let params = ctx.uniform(
+            "vpl path params",
+            &PathParams {
+                centre: world.centre.into(),
+                radius: world.radius,
+                first: paths as u32,
+                paths: n as u32,
+                bounces,
+                lights: world.lights.len() as u32,
+                ray_eps: world.ray_epsilon,
+                block0: (paths / lgh_core::qmc::BLOCK) as u32,
+                groups,
+                pad: 0,
+                seeds,
+            },
+        );
+        let compact = ctx.uniform(
+            "vpl compact params",
+            &CompactParams {
+                paths: n as u32,
+                bounces,
+                done: done as u32,
+                target: target32,
+            },
+        );
+        let slots = ctx.output("vpl slots", n * b * VPL_BYTES)?;
+        let counts = ctx.output("vpl counts", 4 * n)?;
+        let prefix = ctx.output("vpl prefix", 4 * n)?;
+        let total = ctx.output("vpl total", 16)?;
+        let bind = ctx.bind_group(
+            &paths_kernel,
+            vec![
+                params.as_entire_binding(),
+                scene.nodes.as_entire_binding(),
+                scene.tris.as_entire_binding(),
+                surfaces.shade.as_entire_binding(),
+                surfaces.materials.as_entire_binding(),
+                surfaces.texels.as_entire_binding(),
+                lights.binding(),
+                slots.binding(),
+                counts.binding(),
+            ],
+        );
+        let mut batch = Batch::new(ctx);
+        batch.dispatch("vpl paths", &paths_kernel, &bind, n as usize)?;
+        crate::scan::record(ctx, &mut batch, &counts, &prefix, &total, n as usize, false)?;
+        let bind = ctx.bind_group(
+            &compact_kernel,
+            vec![
+                compact.as_entire_binding(),
+                slots.binding(),
+                counts.binding(),
+                prefix.binding(),
+                out.binding(),
+                status.binding(),
+            ],
+        );
+        batch.dispatch("vpl compact", &compact_kernel, &bind, n as usize)?;
+        batch.read(status.buffer(), 16)?;
+        let (reads, _) = batch.finish()?;
+        let words: &[u32] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
+        let [kept, count, ..] = *words else {
+            return Err(GpuError::Failed(
+                "the VPL count's read-back is missing".into(),
+            ));
+        };
+        paths += u64::from(kept);
+        done = u64::from(count);
+        if done >= target as u64 {
+            break;
+        }
+    }
+    let mut batch = Batch::new(ctx);
+    batch.read(out.buffer(), (done.max(1)) * VPL_BYTES)?;
+    let (reads, _) = batch.finish()?;
+    let records: &[[Vec4; 3]] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
+    let scale = 1.0 / paths.max(1) as f32;
+    let n = done as usize;
+    let mut vpls = Vpls::with_capacity(n);
+    for r in &records[..n.min(records.len())] {
+        vpls.push(r[0].truncate(), r[1].truncate(), r[2].truncate());
+    }
+    vpls.scale_flux(scale);
+    Ok(VplSet { vpls, paths })
+}
+
+/// [`generate_vpls`] for a GPU method's
+/// [`lgh_render::methods::IndirectMethod::generate_vpls`] on the process's context:
+/// `Ok(None)` (the CPU traces them) for independent random path numbers
+/// ([`PathNumbers::Random`]), or where the scene or the VPLs do not fit the adapter's
+/// buffers.
+///
+/// # Errors
+/// No adapter, or the GPU failed.
+pub fn method_vpls(
+    world: &World,
+    s: &lgh_render::RenderSettings,
+) -> Result<Option<VplSet>, lgh_render::settings::RenderError> {
+    if s.path_numbers != PathNumbers::Sobol {
+        return Ok(None);
+    }
+    let fail = |e: GpuError| lgh_render::settings::RenderError::Backend(e.to_string());
+    let ctx = GpuContext::shared().map_err(fail)?;
+    match generate_vpls(ctx, world, s.vpls, s.bounces, s.seed) {
+        Ok(set) => Ok(Some(set)),
+        Err(GpuError::TooLarge(_)) => Ok(None),
+        Err(e) => Err(fail(e)),
+    }
+}
