@@ -21,7 +21,8 @@ const PIXEL_BYTES: u64 = 64;
 
 /// The G-buffer as the kernels read it (`Pixel` in their WGSL), one `[vec4; 4]` per pixel,
 /// packed into `bytes`: position (w: 1 where the pixel sees a surface), shading
-/// normal, geometric normal, albedo (w: the linear depth where the pixel sees a surface);
+/// normal (w: 1 where the surface emits towards the camera), geometric normal, albedo (w:
+/// the linear depth where the pixel sees a surface);
 /// `bytes` holds pixels from `first` on.
 fn pack_into(g: &GBuffer, first: usize, bytes: &mut [u8]) {
     for (k, out) in bytes.chunks_exact_mut(PIXEL_BYTES as usize).enumerate() {
@@ -33,7 +34,11 @@ fn pack_into(g: &GBuffer, first: usize, bytes: &mut [u8]) {
         let hit = if g.is_hit(p) { 1.0 } else { 0.0 };
         let px = [
             g.position[p].extend(hit),
-            g.normal[p].extend(0.0),
+            g.normal[p].extend(if g.emission[p] == Vec3::ZERO {
+                0.0
+            } else {
+                1.0
+            }),
             g.geo_normal[p].extend(0.0),
             g.albedo[p].extend(if g.is_hit(p) { g.depth[p] } else { 0.0 }),
         ];
@@ -46,8 +51,8 @@ fn pack_into(g: &GBuffer, first: usize, bytes: &mut [u8]) {
 pub struct GpuGBuffer {
     buffer: wgpu::Buffer,
     /// The planes it was packed from: width, height, and position, normal, geometric normal,
-    /// albedo and depth as bytes.
-    planes: (u32, u32, [Vec<u8>; 5]),
+    /// albedo, depth and emission as bytes.
+    planes: (u32, u32, [Vec<u8>; 6]),
     /// The view of the G-buffer it was packed from.
     view: Option<(u64, CameraFrame)>,
 }
@@ -82,13 +87,14 @@ impl GpuGBuffer {
 }
 
 /// The bytes of the planes the packed G-buffer depends on.
-fn plane_bytes(g: &GBuffer) -> [&[u8]; 5] {
+fn plane_bytes(g: &GBuffer) -> [&[u8]; 6] {
     [
         bytemuck::cast_slice::<Vec3, u8>(&g.position),
         bytemuck::cast_slice::<Vec3, u8>(&g.normal),
         bytemuck::cast_slice::<Vec3, u8>(&g.geo_normal),
         bytemuck::cast_slice::<Vec3, u8>(&g.albedo),
         bytemuck::cast_slice::<f32, u8>(&g.depth),
+        bytemuck::cast_slice::<Vec3, u8>(&g.emission),
     ]
 }
 

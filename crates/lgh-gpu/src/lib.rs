@@ -31,6 +31,7 @@ pub mod vpls;
 pub mod atrous;
 pub mod brute;
 pub mod direct;
+pub mod edges;
 pub mod lgh;
 pub mod primary;
 pub mod ratio;

@@ -23,6 +23,7 @@ fn every_shader_is_valid_wgsl() {
         lgh_gpu::interleave::keys_source(),
         lgh_gpu::ratio::ratio_source(),
         lgh_gpu::primary::source(),
+        lgh_gpu::edges::source(),
     ]
     .into_iter()
     .chain(lgh_gpu::scan::sources())

@@ -208,13 +208,26 @@ pub fn render_frame_with(
             match keep {
                 // A piece of a frame resolves its own rectangle.
                 Some(_) => apply(&make()),
-                None => apply(memory.edge_resolve.get_or_insert_with(
-                    &g,
-                    [s.edge_samples, 0, 0, 0],
-                    make,
-                )),
+                // The method's backend may find it (kept while the view stands still).
+                None => {
+                    let cache = &mut memory.edge_resolve;
+                    let params = [s.edge_samples, 0, 0, 0];
+                    if !cache.holds(&g, params) {
+                        let method = s.method.get();
+                        match method.edge_resolve(world, &camera, &g, s.edge_samples)? {
+                            Some(r) if g.view.is_some() => cache.insert(&g, params, r),
+                            Some(r) => {
+                                apply(&r);
+                                return Ok(());
+                            }
+                            None => {}
+                        }
+                    }
+                    apply(cache.get_or_insert_with(&g, params, make));
+                }
             }
-        });
+            Ok::<_, RenderError>(())
+        })?;
     }
     let emission = Image::from_pixels(w, h, emission);
     let direct = Image::from_pixels(w, h, direct);

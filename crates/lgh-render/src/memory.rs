@@ -71,6 +71,20 @@ impl<T> ViewCache<T> {
         }
         self.value.get_or_insert_with(make)
     }
+
+    /// True if the kept value is the one for `g` with `params`
+    /// ([`ViewCache::get_or_insert_with`] would return it without making one).
+    #[must_use]
+    pub fn holds(&self, g: &GBuffer, params: [u32; 4]) -> bool {
+        let key = g.view.map(|(id, frame)| (id, frame, params));
+        key.is_some() && key == self.key && self.value.is_some()
+    }
+
+    /// Keeps `value` as the one for `g` with `params`.
+    pub fn insert(&mut self, g: &GBuffer, params: [u32; 4], value: T) {
+        self.key = g.view.map(|(id, frame)| (id, frame, params));
+        self.value = Some(value);
+    }
 }
 
 impl FrameMemory {

@@ -91,6 +91,16 @@ impl IndirectMethod for GpuBrute {
         crate::vpls::method_vpls(world, s)
     }
 
+    fn edge_resolve(
+        &self,
+        world: &lgh_render::World,
+        camera: &lgh_scene::camera::CameraFrame,
+        g: &GBuffer,
+        samples: u32,
+    ) -> Result<Option<lgh_render::passes::edge_aa::EdgeResolve>, RenderError> {
+        crate::edges::method_edge_resolve(world, camera, g, samples)
+    }
+
     fn render(&self, i: &MethodInputs, _: &mut FrameMemory) -> Result<MethodOutput, RenderError> {
         let fail = |e: GpuError| RenderError::Backend(e.to_string());
         let ctx = GpuContext::shared().map_err(fail)?;

@@ -17,10 +17,10 @@ use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
 use crate::pool::Lease;
 
-/// `Params` of `shaders/primary.wgsl`.
+/// `Camera` of `shaders/camera.wgsl`: what `CameraFrame::direction` computes from.
 #[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Params {
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct GpuCamera {
     origin: [f32; 3],
     width: u32,
     forward: [f32; 3],
@@ -33,6 +33,25 @@ struct Params {
     size: [f32; 2],
 }
 
+impl GpuCamera {
+    /// The camera `camera` for a `width` x `height` image.
+    pub(crate) fn new(camera: &CameraFrame, width: u32, height: u32) -> Self {
+        let (right, up, scale, size, jitter) = camera.ray_basis();
+        Self {
+            origin: camera.origin.into(),
+            width,
+            forward: camera.forward.into(),
+            height,
+            right: right.into(),
+            jitter_x: jitter.x,
+            up: up.into(),
+            jitter_y: jitter.y,
+            scale: scale.into(),
+            size: size.into(),
+        }
+    }
+}
+
 /// Bytes per pixel of the packed G-buffer and of the emission.
 const PIXEL_BYTES: u64 = 64;
 const EMISSION_BYTES: u64 = 16;
@@ -42,6 +61,7 @@ const EMISSION_BYTES: u64 = 16;
 pub fn source() -> String {
     crate::kernel(&[
         include_str!("../shaders/primary.wgsl"),
+        include_str!("../shaders/camera.wgsl"),
         include_str!("../shaders/surface.wgsl"),
         include_str!("../shaders/bvh.wgsl"),
     ])
@@ -79,22 +99,7 @@ pub fn trace_gbuffer(
         mapped_at_creation: false,
     });
     let emission: Lease<'_> = ctx.output("emission", (n as u64 * EMISSION_BYTES).max(16))?;
-    let (right, up, scale, size, jitter) = camera.ray_basis();
-    let params = ctx.uniform(
-        "primary params",
-        &Params {
-            origin: camera.origin.into(),
-            width,
-            forward: camera.forward.into(),
-            height,
-            right: right.into(),
-            jitter_x: jitter.x,
-            up: up.into(),
-            jitter_y: jitter.y,
-            scale: scale.into(),
-            size: size.into(),
-        },
-    );
+    let params = ctx.uniform("primary camera", &GpuCamera::new(camera, width, height));
     let pipeline = ctx.pipeline("primary", source);
     let bind = ctx.bind_group(
         &pipeline,

@@ -3,7 +3,8 @@
 const PI: f32 = 3.14159265358979;
 
 // A G-buffer pixel (lgh_gpu::gbuffer): position (w: 1 where the pixel sees a surface),
-// shading normal, geometric normal, albedo (w: the linear depth where it sees a surface).
+// shading normal (w: 1 where the surface emits towards the camera), geometric normal, albedo
+// (w: the linear depth where it sees a surface).
 struct Pixel {
     position: vec4<f32>,
     normal: vec4<f32>,

@@ -200,6 +200,21 @@ pub trait IndirectMethod: Sync + Send {
     ) -> Result<Option<crate::passes::vpl_gen::VplSet>, RenderError> {
         Ok(None)
     }
+    /// The frame's edge resolve (`EdgeResolve::new(world, camera, g, samples, None)`)
+    /// found on this method's own backend, or `Ok(None)`, the default, for the CPU's pass.
+    /// lgh-gpu's methods trace the sub-pixel samples on the GPU.
+    ///
+    /// # Errors
+    /// The backend failed.
+    fn edge_resolve(
+        &self,
+        _world: &World,
+        _camera: &CameraFrame,
+        _g: &GBuffer,
+        _samples: u32,
+    ) -> Result<Option<crate::passes::edge_aa::EdgeResolve>, RenderError> {
+        Ok(None)
+    }
     /// Traces the frame's primary rays into `g` (`world` seen by `camera` at `width` x
     /// `height`, every plane and [`GBuffer::view`] set as [`GBuffer::render_into`] sets
     /// them) on this method's own backend and returns `Ok(true)`, or returns `Ok(false)`,

@@ -166,6 +166,32 @@ impl EdgeResolve {
         out
     }
 
+    /// The resolve of a `width` x `height` frame with `samples` sub-pixel samples per edge
+    /// pixel from its edge pixels' counts (pixel, counts of its 3 x 3 neighbours row by
+    /// row), in any order: what [`EdgeResolve::new`] finds, found by another backend
+    /// (lgh-gpu traces the samples on the GPU).
+    #[must_use]
+    pub fn from_edges(
+        width: u32,
+        height: u32,
+        samples: u32,
+        mut edges: Vec<(u32, [u8; 9])>,
+    ) -> Self {
+        edges.sort_unstable_by_key(|e| e.0);
+        Self {
+            width,
+            height,
+            samples: samples.clamp(1, MAX_EDGE_SAMPLES),
+            edges,
+        }
+    }
+
+    /// The edge pixels and their counts, in pixel order.
+    #[must_use]
+    pub fn edges(&self) -> &[(u32, [u8; 9])] {
+        &self.edges
+    }
+
     /// Number of edge pixels.
     #[must_use]
     pub fn edge_pixels(&self) -> usize {
