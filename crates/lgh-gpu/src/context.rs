@@ -59,6 +59,8 @@ pub struct GpuContext {
     gbuffers: GBufferCache,
     /// What hierarchy builders keep between frames ([`crate::grid::GpuGridBuilder`]).
     grids: crate::grid::GridStates,
+    /// The frame's VPLs kept for its hierarchy build ([`crate::vpls`]).
+    resident_vpls: Mutex<Option<crate::vpls::resident::Resident>>,
 }
 
 impl GpuContext {
@@ -99,6 +101,7 @@ impl GpuContext {
             pool: BufferPool::default(),
             gbuffers: GBufferCache::default(),
             grids: crate::grid::GridStates::default(),
+            resident_vpls: Mutex::default(),
         })
     }
 
@@ -245,6 +248,11 @@ impl GpuContext {
     /// The states of the hierarchy builders not in use.
     pub(crate) fn grid_states(&self) -> &crate::grid::GridStates {
         &self.grids
+    }
+
+    /// The frame's VPLs kept for its hierarchy build.
+    pub(crate) fn resident_vpls(&self) -> &Mutex<Option<crate::vpls::resident::Resident>> {
+        &self.resident_vpls
     }
 
     /// The pool of buffers kept between frames.

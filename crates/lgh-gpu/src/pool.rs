@@ -84,6 +84,41 @@ impl Lease<'_> {
     }
 }
 
+/// A lease's buffer kept beyond its frame's work ([`Lease::detach`]): a frame's VPLs in
+/// the hierarchy build's layout, kept on the GPU for the build that follows
+/// ([`crate::vpls`]). Attached again ([`GpuContext::attach`]), it is a lease that returns
+/// the buffer to the pool; dropped detached, the buffer is freed.
+#[derive(Debug)]
+pub(crate) struct Detached {
+    key: (&'static str, u32),
+    buffer: wgpu::Buffer,
+    bytes: u64,
+}
+
+impl Lease<'_> {
+    /// The buffer, no longer returned to the pool when this is dropped.
+    pub(crate) fn detach(mut self) -> Detached {
+        let buffer = self.buffer.take().unwrap_or_else(|| unreachable!());
+        Detached {
+            key: self.key,
+            buffer,
+            bytes: self.bytes,
+        }
+    }
+}
+
+impl GpuContext {
+    /// `d` as a lease again.
+    pub(crate) fn attach(&self, d: Detached) -> Lease<'_> {
+        Lease {
+            ctx: self,
+            key: d.key,
+            buffer: Some(d.buffer),
+            bytes: d.bytes,
+        }
+    }
+}
+
 impl Drop for Lease<'_> {
     fn drop(&mut self) {
         if let Some(b) = self.buffer.take() {

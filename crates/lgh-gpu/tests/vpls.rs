@@ -129,3 +129,50 @@ fn gpu_vpls_are_the_cpu_vpls_on_the_shared_scenes() {
         assert!(m <= 0.01, "{name}: {:.3}% of the VPLs differ", 100.0 * m);
     }
 }
+
+/// A GPU frame's VPLs stay on the GPU for its hierarchy build: the build of exactly those
+/// VPLs uploads nothing and gives the grid that uploading them gives; a copy of them (other
+/// arrays) is uploaded, and the kept VPLs are gone after one build either way.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn a_frames_vpls_stay_on_the_gpu_for_its_build() {
+    use lgh_core::lighting_grid::{Construction, HierarchyBuilder, LevelCount};
+    let ctx = lgh_gpu::GpuContext::shared().expect("an adapter");
+    let world = world(Some("test/two-rooms.toml"));
+    let s = lgh_render::RenderSettings {
+        vpls: 8_000,
+        seed: 4,
+        ..lgh_render::RenderSettings::default()
+    };
+    let build = |vpls: &lgh_core::vpl::Vpls| {
+        let mut b = lgh_gpu::grid::GpuGridBuilder::new(ctx);
+        let t = b
+            .build(&vpls.as_input(), LevelCount::Auto, Construction::Restrict)
+            .expect("build");
+        assert_eq!(b.fallback, None);
+        (
+            t.get("gpu_upload").is_some(),
+            b.grid().expect("grid").clone(),
+        )
+    };
+    let set = lgh_gpu::vpls::method_vpls(&world, &s, true)
+        .expect("gpu")
+        .expect("vpls on the gpu");
+    let (uploaded, kept) = build(&set.vpls);
+    assert!(!uploaded, "the frame's VPLs were on the GPU");
+    let (uploaded, again) = build(&set.vpls);
+    assert!(uploaded, "a second build uploads");
+    assert_eq!(kept, again, "the same grid");
+    let set = lgh_gpu::vpls::method_vpls(&world, &s, true)
+        .expect("gpu")
+        .expect("vpls on the gpu");
+    let copy = set.vpls.clone();
+    let (uploaded, from_copy) = build(&copy);
+    assert!(uploaded, "a copy is uploaded");
+    assert_eq!(from_copy, kept);
+    let (uploaded, _) = build(&set.vpls);
+    assert!(uploaded, "the kept VPLs went with the first build");
+}

@@ -88,7 +88,7 @@ impl IndirectMethod for GpuBrute {
         world: &lgh_render::World,
         s: &lgh_render::RenderSettings,
     ) -> Result<Option<lgh_render::passes::vpl_gen::VplSet>, RenderError> {
-        crate::vpls::method_vpls(world, s)
+        crate::vpls::method_vpls(world, s, false)
     }
 
     fn edge_resolve(

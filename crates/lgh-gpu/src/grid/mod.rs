@@ -46,6 +46,11 @@ mod marks;
 
 /// Floats per light in the uploaded lights: position, intensity, normal.
 const LIGHT_FLOATS: usize = 9;
+/// Bytes per light in the uploaded lights.
+pub(crate) const LIGHT_BYTES: u64 = 4 * LIGHT_FLOATS as u64;
+/// The pool's label of the uploaded lights (the frame's VPLs kept on the GPU are leased
+/// under it too, [`crate::vpls`]).
+pub(crate) const LIGHTS_IN: &str = "grid lights in";
 /// Words per grid light read back (vertex and mass, position, intensity, normal; the
 /// deviation in the fourth word of the last three).
 const RECORD_WORDS: usize = 16;
@@ -248,6 +253,8 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
     ) -> Result<BuildTimings, GridError> {
         self.fallback = None;
         self.passes.clear();
+        // The frame's VPLs, if they are still on the GPU in the build's layout.
+        let resident = crate::vpls::resident::take(self.ctx, lights);
         if construction != Construction::GatherFromS1 {
             let mut t = BuildTimings::default();
             let (lo, hi) = t.time("bounds", || lighting_grid::bounds(lights))?;
@@ -258,7 +265,12 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
                 bounds: lighting_grid::shifted_bounds(lo, hi, state.cpu.shift()),
                 seed: state.seed,
             };
-            match build_on(ctx, lights, &request, state, &mut t, &mut self.passes) {
+            let run = Run {
+                lights,
+                resident,
+                request: &request,
+            };
+            match build_on(ctx, run, state, &mut t, &mut self.passes) {
                 Ok(()) => {
                     state.on_cpu = false;
                     state.built = true;
@@ -308,17 +320,28 @@ struct Request {
     seed: Option<u64>,
 }
 
+/// The lights of one build: on the CPU, and the same on the GPU if they are there already.
+struct Run<'a, 'c> {
+    lights: &'a InputLights<'a>,
+    resident: Option<Lease<'c>>,
+    request: &'a Request,
+}
+
 /// Builds the hierarchy of `lights` on the GPU into `state` (its grid, and the S_1
 /// representatives where asked), with its timings in `t` and the GPU's pass times in
 /// `passes`.
-fn build_on(
-    ctx: &GpuContext,
-    lights: &InputLights,
-    request: &Request,
+fn build_on<'c>(
+    ctx: &'c GpuContext,
+    run: Run<'_, 'c>,
     state: &mut GridState,
     t: &mut BuildTimings,
     passes: &mut PassTimes,
 ) -> Result<(), GpuError> {
+    let Run {
+        lights,
+        resident,
+        request,
+    } = run;
     let Request {
         levels,
         bounds: (lo, hi),
@@ -342,9 +365,16 @@ fn build_on(
     // Step 1: the lights up, the marks, their numbering and the counts. The level rule's
     // walk usually stays within two levels of its guess: those are marked first, and all
     // ten only if the walk reaches the last marked.
-    let start = Instant::now();
-    let up = upload_lights(ctx, lights)?;
-    t.push("gpu_upload", start.elapsed().as_secs_f64() * 1e3);
+    // (No upload where the frame's VPLs are on the GPU already: no `gpu_upload` time.)
+    let up = match resident {
+        Some(lease) => lease,
+        None => {
+            let start = Instant::now();
+            let up = upload_lights(ctx, lights)?;
+            t.push("gpu_upload", start.elapsed().as_secs_f64() * 1e3);
+            up
+        }
+    };
     let start = Instant::now();
     let mut m = marks::mark(ctx, &up, &base, n, first_marks, passes)?;
     let l_max = match levels {
@@ -570,7 +600,7 @@ fn record(
 fn upload_lights<'c>(ctx: &'c GpuContext, lights: &InputLights) -> Result<Lease<'c>, GpuError> {
     let n = lights.positions.len();
     let lease = ctx.lease(
-        "grid lights in",
+        LIGHTS_IN,
         4 * (LIGHT_FLOATS * n) as u64,
         GpuContext::STORAGE,
     )?;

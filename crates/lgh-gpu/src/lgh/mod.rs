@@ -92,7 +92,7 @@ impl IndirectMethod for GpuLgh {
         world: &lgh_render::World,
         s: &lgh_render::RenderSettings,
     ) -> Result<Option<lgh_render::passes::vpl_gen::VplSet>, RenderError> {
-        crate::vpls::method_vpls(world, s)
+        crate::vpls::method_vpls(world, s, true)
     }
 
     fn edge_resolve(

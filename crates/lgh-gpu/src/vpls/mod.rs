@@ -11,6 +11,7 @@
 //! scheduling. The warps' `cos`, `sin` and `sqrt` are the GPU's, so a position may differ
 //! from the CPU's in its last bits, and a path that grazes an edge may take another turn.
 
+pub(crate) mod resident;
 pub mod tables;
 
 use glam::Vec4;
@@ -20,6 +21,7 @@ use lgh_render::passes::vpl_gen::{PathNumbers, VplSet, max_paths, path_seed};
 
 use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
+use crate::pool::Lease;
 
 /// The most paths of one batch (as the CPU's).
 const MAX_BATCH: u64 = 1 << 20;
@@ -55,9 +57,19 @@ struct CompactParams {
     target: u32,
 }
 
-/// The WGSL sources of the light-path kernel and the compaction.
+/// `Params` of `shaders/vpl_grid.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GridInParams {
+    count: u32,
+    scale: f32,
+    pad: [u32; 2],
+}
+
+/// The WGSL sources of the light-path kernel, the compaction and the conversion to the
+/// hierarchy build's layout.
 #[must_use]
-pub fn sources() -> [String; 2] {
+pub fn sources() -> [String; 3] {
     [
         crate::kernel(&[
             include_str!("../shaders/vpl_paths.wgsl"),
@@ -67,6 +79,7 @@ pub fn sources() -> [String; 2] {
             include_str!("../shaders/bvh.wgsl"),
         ]),
         crate::kernel(&[include_str!("../shaders/vpl_compact.wgsl")]),
+        crate::kernel(&[include_str!("../shaders/vpl_grid.wgsl")]),
     ]
 }
 
@@ -82,8 +95,19 @@ pub fn generate_vpls(
     bounces: u32,
     seed: u64,
 ) -> Result<VplSet, GpuError> {
+    generate(ctx, world, (target, bounces, seed), false).map(|(set, _)| set)
+}
+
+/// [`generate_vpls`] for `(target, bounces, seed)`, and with `for_grid` the VPLs also in
+/// the hierarchy build's layout, left on the GPU.
+fn generate<'c>(
+    ctx: &'c GpuContext,
+    world: &World,
+    (target, bounces, seed): (usize, u32, u64),
+    for_grid: bool,
+) -> Result<(VplSet, Option<Lease<'c>>), GpuError> {
     let Some(table) = tables::tables(world).filter(|_| target > 0 && bounces > 0) else {
-        return Ok(VplSet::default());
+        return Ok((VplSet::default(), None));
     };
     let too_large = || GpuError::TooLarge(format!("{target} VPLs"));
     let target32 = u32::try_from(target).map_err(|_| too_large())?;
@@ -103,7 +127,7 @@ pub fn generate_vpls(
     }
     let out = ctx.output("vpls", out_bytes)?;
     let status = ctx.output("vpl status", 16)?;
-    let [paths_src, compact_src] = sources();
+    let [paths_src, compact_src, grid_src] = sources();
     let paths_kernel = ctx.pipeline("vpl paths", || paths_src);
     let compact_kernel = ctx.pipeline("vpl compact", || compact_src);
     let set_seed = path_seed(seed);
@@ -200,39 +224,71 @@ pub fn generate_vpls(
             break;
         }
     }
+    let scale = 1.0 / paths.max(1) as f32;
     let mut batch = Batch::new(ctx);
+    let grid_in = if for_grid && done > 0 {
+        let lights = ctx.lease(
+            crate::grid::LIGHTS_IN,
+            done * crate::grid::LIGHT_BYTES,
+            GpuContext::STORAGE,
+        )?;
+        let params = ctx.uniform(
+            "vpl grid params",
+            &GridInParams {
+                count: done as u32,
+                scale,
+                pad: [0; 2],
+            },
+        );
+        let kernel = ctx.pipeline("vpl grid", || grid_src);
+        let bind = ctx.bind_group(
+            &kernel,
+            vec![params.as_entire_binding(), out.binding(), lights.binding()],
+        );
+        batch.dispatch("vpl grid", &kernel, &bind, done as usize)?;
+        Some(lights)
+    } else {
+        None
+    };
     batch.read(out.buffer(), (done.max(1)) * VPL_BYTES)?;
     let (reads, _) = batch.finish()?;
     let records: &[[Vec4; 3]] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
-    let scale = 1.0 / paths.max(1) as f32;
     let n = done as usize;
     let mut vpls = Vpls::with_capacity(n);
     for r in &records[..n.min(records.len())] {
         vpls.push(r[0].truncate(), r[1].truncate(), r[2].truncate());
     }
     vpls.scale_flux(scale);
-    Ok(VplSet { vpls, paths })
+    Ok((VplSet { vpls, paths }, grid_in))
 }
 
 /// [`generate_vpls`] for a GPU method's
 /// [`lgh_render::methods::IndirectMethod::generate_vpls`] on the process's context:
 /// `Ok(None)` (the CPU traces them) for independent random path numbers
 /// ([`PathNumbers::Random`]), or where the scene or the VPLs do not fit the adapter's
-/// buffers.
+/// buffers. With `for_grid` (a method that builds a hierarchy over them) the VPLs are also
+/// kept on the GPU for the build ([`resident`]).
 ///
 /// # Errors
 /// No adapter, or the GPU failed.
 pub fn method_vpls(
     world: &World,
     s: &lgh_render::RenderSettings,
+    for_grid: bool,
 ) -> Result<Option<VplSet>, lgh_render::settings::RenderError> {
+    let fail = |e: GpuError| lgh_render::settings::RenderError::Backend(e.to_string());
+    let ctx = GpuContext::shared().map_err(fail)?;
+    resident::clear(ctx);
     if s.path_numbers != PathNumbers::Sobol {
         return Ok(None);
     }
-    let fail = |e: GpuError| lgh_render::settings::RenderError::Backend(e.to_string());
-    let ctx = GpuContext::shared().map_err(fail)?;
-    match generate_vpls(ctx, world, s.vpls, s.bounces, s.seed) {
-        Ok(set) => Ok(Some(set)),
+    match generate(ctx, world, (s.vpls, s.bounces, s.seed), for_grid) {
+        Ok((set, lights)) => {
+            if let Some(lights) = lights {
+                resident::keep(ctx, resident::Key::of(&set.vpls.as_input()), lights);
+            }
+            Ok(Some(set))
+        }
         Err(GpuError::TooLarge(_)) => Ok(None),
         Err(e) => Err(fail(e)),
     }
