@@ -127,7 +127,27 @@ impl GpuContext {
         {
             return Ok(Arc::clone(last));
         }
-        let bytes = (g.len() as u64 * PIXEL_BYTES).max(PIXEL_BYTES);
+        let (buffer, bytes) = self.gbuffer_buffer(g.len())?;
+        self.write_parallel(&buffer, bytes, |at, out| {
+            pack_into(g, at / PIXEL_BYTES as usize, out);
+        });
+        let (w, h) = (g.width, g.height);
+        let planes = plane_bytes(g).map(<[u8]>::to_vec);
+        let up = Arc::new(GpuGBuffer {
+            buffer,
+            planes: (w, h, planes),
+            view: g.view,
+        });
+        *cache.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::clone(&up));
+        Ok(up)
+    }
+
+    /// A new buffer for a packed G-buffer of `pixels` pixels, and its size in bytes.
+    ///
+    /// # Errors
+    /// Larger than the adapter's largest storage buffer.
+    pub(crate) fn gbuffer_buffer(&self, pixels: usize) -> Result<(wgpu::Buffer, u64), GpuError> {
+        let bytes = (pixels as u64 * PIXEL_BYTES).max(PIXEL_BYTES);
         if bytes > self.limits.max_storage_buffer_binding_size {
             return Err(GpuError::TooLarge(format!(
                 "the G-buffer: {} MB exceed the adapter's largest storage buffer ({} MB)",
@@ -141,18 +161,7 @@ impl GpuContext {
             usage: Self::STORAGE,
             mapped_at_creation: false,
         });
-        self.write_parallel(&buffer, bytes, |at, out| {
-            pack_into(g, at / PIXEL_BYTES as usize, out);
-        });
-        let (w, h) = (g.width, g.height);
-        let planes = plane_bytes(g).map(<[u8]>::to_vec);
-        let up = Arc::new(GpuGBuffer {
-            buffer,
-            planes: (w, h, planes),
-            view: g.view,
-        });
-        *cache.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::clone(&up));
-        Ok(up)
+        Ok((buffer, bytes))
     }
 
     /// Makes `buffer`, packed on the GPU for the G-buffer `g` (whose view is known:

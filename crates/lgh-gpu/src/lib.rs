@@ -11,8 +11,11 @@
 //! shadow rays ([`lgh::LGH_GPU`]) followed by the interleaving blur ([`interleave`]) and the
 //! ratio estimator ([`ratio`], [`atrous`]); the direct light of both ([`direct`]); and the
 //! lighting grid hierarchy with its S_1 lights' representatives ([`grid`], built with an
-//! integer prefix sum, [`scan`]). The G-buffer, the VPLs, the unbiased estimate's other
-//! tables and the tile binning run on the CPU.
+//! integer prefix sum, [`scan`]). The frame's passes before shading run here too: primary
+//! rays into the G-buffer ([`primary`], with the scene's [`surfaces`]), VPL generation by
+//! light tracing with the CPU's Sobol numbers ([`vpls`]), and the edge resolve's sub-pixel
+//! samples ([`edges`]). The unbiased estimate's other tables, the tile binning and the
+//! composite run on the CPU.
 //!
 //! The GPU methods are [`lgh_render::Method`]s like the CPU's: `render_frame` runs them with
 //! the same settings and gives the same `Frame`. Results are deterministic: every pixel sums
@@ -42,6 +45,56 @@ pub use batch::Batch;
 pub use context::{GpuContext, GpuError};
 pub use pool::Lease;
 pub use scene::GpuScene;
+
+/// The hooks of lgh-render's `IndirectMethod` by which a GPU method runs the frame's other
+/// passes on the GPU: the G-buffer ([`primary`]), the VPLs ([`vpls`]; `for_grid`: keep
+/// them on the GPU for the method's hierarchy build), the direct light ([`direct`]) and the
+/// edge resolve ([`edges`]). Expanded inside the method's `impl IndirectMethod`.
+macro_rules! gpu_frame_passes {
+    (for_grid: $for_grid:expr) => {
+        fn direct(
+            &self,
+            world: &lgh_render::World,
+            g: &lgh_render::passes::gbuffer::GBuffer,
+            s: &lgh_render::RenderSettings,
+        ) -> Result<Option<lgh_render::direct::DirectOutput>, lgh_render::settings::RenderError> {
+            crate::direct::method_direct(world, g, s)
+        }
+
+        fn trace_gbuffer(
+            &self,
+            world: &lgh_render::World,
+            camera: &lgh_scene::camera::CameraFrame,
+            size: (u32, u32),
+            g: &mut lgh_render::passes::gbuffer::GBuffer,
+        ) -> Result<bool, lgh_render::settings::RenderError> {
+            crate::primary::method_gbuffer(world, camera, size, g)
+        }
+
+        fn generate_vpls(
+            &self,
+            world: &lgh_render::World,
+            s: &lgh_render::RenderSettings,
+        ) -> Result<Option<lgh_render::passes::vpl_gen::VplSet>, lgh_render::settings::RenderError>
+        {
+            crate::vpls::method_vpls(world, s, $for_grid)
+        }
+
+        fn edge_resolve(
+            &self,
+            world: &lgh_render::World,
+            camera: &lgh_scene::camera::CameraFrame,
+            g: &lgh_render::passes::gbuffer::GBuffer,
+            samples: u32,
+        ) -> Result<
+            Option<lgh_render::passes::edge_aa::EdgeResolve>,
+            lgh_render::settings::RenderError,
+        > {
+            crate::edges::method_edge_resolve(world, camera, g, samples)
+        }
+    };
+}
+pub(crate) use gpu_frame_passes;
 
 /// A kernel's WGSL: the shared declarations (`shaders/common.wgsl`: the G-buffer's `Pixel`,
 /// `luminance`, `hash`, `PI`) followed by `parts` (the kernel, and `shaders/bvh.wgsl` for the

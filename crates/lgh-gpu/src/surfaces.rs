@@ -67,6 +67,28 @@ impl GpuSurfaces {
     }
 }
 
+impl GpuSurfaces {
+    /// The first six bindings of a kernel that traces rays to surfaces (primary rays, light
+    /// paths, the edge resolve): its uniform `params`, the BVH nodes, the triangles, the
+    /// triangles' shading data, the materials and the texels; the kernel's own buffers
+    /// follow.
+    #[must_use]
+    pub fn bindings<'a>(
+        &'a self,
+        params: &'a wgpu::Buffer,
+        scene: &'a crate::GpuScene,
+    ) -> Vec<wgpu::BindingResource<'a>> {
+        vec![
+            params.as_entire_binding(),
+            scene.nodes.as_entire_binding(),
+            scene.tris.as_entire_binding(),
+            self.shade.as_entire_binding(),
+            self.materials.as_entire_binding(),
+            self.texels.as_entire_binding(),
+        ]
+    }
+}
+
 /// Each triangle's [`TriShade`], in `order`.
 fn shade_records(world: &lgh_render::World, order: &[u32]) -> Vec<TriShade> {
     let mesh = &world.scene.mesh;

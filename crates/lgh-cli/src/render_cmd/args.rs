@@ -36,11 +36,11 @@ pub struct RenderArgs {
     /// The ray tracer.
     #[command(flatten)]
     pub accel: lgh_render::world::accel::AccelChoice,
-    /// Where the indirect light is computed: cpu, or gpu (wgpu compute shaders on a Vulkan,
-    /// Metal or DX12 adapter). On the GPU so far: brute and brute-unshadowed whole, and lgh
-    /// and lgh-unshadowed's lighting loop with its shadow samples, targets and rays (lgh's
-    /// default estimate only); the G-buffer, VPLs, hierarchy build, filters and direct light
-    /// stay on the CPU.
+    /// Where the frame is computed: cpu, or gpu (wgpu compute shaders on a Vulkan, Metal or
+    /// DX12 adapter). On the GPU: the G-buffer, the VPLs (Sobol path numbers), the edge
+    /// resolve's rays, the direct light, and the methods brute, brute-unshadowed, lgh and
+    /// lgh-unshadowed (lgh's default estimate only) with lgh's hierarchy build, shadow rays
+    /// and filters; lgh's tables and the composite stay on the CPU.
     #[arg(long, value_enum, default_value_t = Device::Cpu)]
     pub device: Device,
     /// Render N frames of the (static) view with independent VPL sets (seeds derived from

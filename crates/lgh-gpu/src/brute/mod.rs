@@ -12,7 +12,6 @@ use std::f32::consts::FRAC_1_PI;
 use glam::{Vec3, Vec4};
 use lgh_render::memory::FrameMemory;
 use lgh_render::methods::{IndirectMethod, Method, MethodInputs, MethodOutput};
-use lgh_render::passes::gbuffer::GBuffer;
 use lgh_render::settings::RenderError;
 
 use bytemuck::Zeroable;
@@ -64,42 +63,7 @@ impl IndirectMethod for GpuBrute {
         "Every pixel sums every VPL (with an exact shadow ray each unless unshadowed), on the GPU"
     }
 
-    fn direct(
-        &self,
-        world: &lgh_render::World,
-        g: &GBuffer,
-        s: &lgh_render::RenderSettings,
-    ) -> Result<Option<lgh_render::direct::DirectOutput>, RenderError> {
-        crate::direct::method_direct(world, g, s)
-    }
-
-    fn trace_gbuffer(
-        &self,
-        world: &lgh_render::World,
-        camera: &lgh_scene::camera::CameraFrame,
-        size: (u32, u32),
-        g: &mut GBuffer,
-    ) -> Result<bool, RenderError> {
-        crate::primary::method_gbuffer(world, camera, size, g)
-    }
-
-    fn generate_vpls(
-        &self,
-        world: &lgh_render::World,
-        s: &lgh_render::RenderSettings,
-    ) -> Result<Option<lgh_render::passes::vpl_gen::VplSet>, RenderError> {
-        crate::vpls::method_vpls(world, s, false)
-    }
-
-    fn edge_resolve(
-        &self,
-        world: &lgh_render::World,
-        camera: &lgh_scene::camera::CameraFrame,
-        g: &GBuffer,
-        samples: u32,
-    ) -> Result<Option<lgh_render::passes::edge_aa::EdgeResolve>, RenderError> {
-        crate::edges::method_edge_resolve(world, camera, g, samples)
-    }
+    crate::gpu_frame_passes!(for_grid: false);
 
     fn render(&self, i: &MethodInputs, _: &mut FrameMemory) -> Result<MethodOutput, RenderError> {
         let fail = |e: GpuError| RenderError::Backend(e.to_string());

@@ -76,20 +76,9 @@ pub fn edge_resolve(
     let list = ctx.output("edge pixels", 16 * n as u64)?;
     let count = ctx.output("edge count", 16)?;
     let pipeline = ctx.pipeline("edges", source);
-    let bind = ctx.bind_group(
-        &pipeline,
-        vec![
-            params.as_entire_binding(),
-            scene.nodes.as_entire_binding(),
-            scene.tris.as_entire_binding(),
-            surfaces.shade.as_entire_binding(),
-            surfaces.materials.as_entire_binding(),
-            surfaces.texels.as_entire_binding(),
-            gbuffer.binding(),
-            list.binding(),
-            count.binding(),
-        ],
-    );
+    let mut resources = surfaces.bindings(&params, &scene);
+    resources.extend([gbuffer.binding(), list.binding(), count.binding()]);
+    let bind = ctx.bind_group(&pipeline, resources);
     let mut batch = Batch::new(ctx);
     batch.clear_lease(&count);
     batch.dispatch("edge samples", &pipeline, &bind, n)?;

@@ -68,42 +68,7 @@ impl IndirectMethod for GpuLgh {
         self.cpu.get().default_shadow_samples()
     }
 
-    fn direct(
-        &self,
-        world: &lgh_render::World,
-        g: &GBuffer,
-        s: &lgh_render::RenderSettings,
-    ) -> Result<Option<lgh_render::direct::DirectOutput>, RenderError> {
-        crate::direct::method_direct(world, g, s)
-    }
-
-    fn trace_gbuffer(
-        &self,
-        world: &lgh_render::World,
-        camera: &lgh_scene::camera::CameraFrame,
-        size: (u32, u32),
-        g: &mut GBuffer,
-    ) -> Result<bool, RenderError> {
-        crate::primary::method_gbuffer(world, camera, size, g)
-    }
-
-    fn generate_vpls(
-        &self,
-        world: &lgh_render::World,
-        s: &lgh_render::RenderSettings,
-    ) -> Result<Option<lgh_render::passes::vpl_gen::VplSet>, RenderError> {
-        crate::vpls::method_vpls(world, s, true)
-    }
-
-    fn edge_resolve(
-        &self,
-        world: &lgh_render::World,
-        camera: &lgh_scene::camera::CameraFrame,
-        g: &GBuffer,
-        samples: u32,
-    ) -> Result<Option<lgh_render::passes::edge_aa::EdgeResolve>, RenderError> {
-        crate::edges::method_edge_resolve(world, camera, g, samples)
-    }
+    crate::gpu_frame_passes!(for_grid: true);
 
     fn render(
         &self,

@@ -52,8 +52,7 @@ impl GpuCamera {
     }
 }
 
-/// Bytes per pixel of the packed G-buffer and of the emission.
-const PIXEL_BYTES: u64 = 64;
+/// Bytes per pixel of the emission.
 const EMISSION_BYTES: u64 = 16;
 
 /// The WGSL source of the kernel (with the surface evaluation and the BVH traversal).
@@ -84,36 +83,13 @@ pub fn trace_gbuffer(
     let n = width as usize * height as usize;
     let scene = ctx.scene(world)?;
     let surfaces = scene.surfaces(ctx, world)?;
-    let bytes = (n as u64 * PIXEL_BYTES).max(PIXEL_BYTES);
-    if bytes > ctx.limits.max_storage_buffer_binding_size {
-        return Err(GpuError::TooLarge(format!(
-            "the G-buffer: {} MB exceed the adapter's largest storage buffer ({} MB)",
-            bytes >> 20,
-            ctx.limits.max_storage_buffer_binding_size >> 20
-        )));
-    }
-    let packed = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("g-buffer"),
-        size: bytes,
-        usage: GpuContext::STORAGE,
-        mapped_at_creation: false,
-    });
+    let (packed, bytes) = ctx.gbuffer_buffer(n)?;
     let emission: Lease<'_> = ctx.output("emission", (n as u64 * EMISSION_BYTES).max(16))?;
     let params = ctx.uniform("primary camera", &GpuCamera::new(camera, width, height));
     let pipeline = ctx.pipeline("primary", source);
-    let bind = ctx.bind_group(
-        &pipeline,
-        vec![
-            params.as_entire_binding(),
-            scene.nodes.as_entire_binding(),
-            scene.tris.as_entire_binding(),
-            surfaces.shade.as_entire_binding(),
-            surfaces.materials.as_entire_binding(),
-            surfaces.texels.as_entire_binding(),
-            packed.as_entire_binding(),
-            emission.binding(),
-        ],
-    );
+    let mut resources = surfaces.bindings(&params, &scene);
+    resources.extend([packed.as_entire_binding(), emission.binding()]);
+    let bind = ctx.bind_group(&pipeline, resources);
     let mut batch = Batch::new(ctx);
     batch.dispatch("primary rays", &pipeline, &bind, n)?;
     batch.read(&packed, bytes)?;

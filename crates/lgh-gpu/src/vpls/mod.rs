@@ -181,20 +181,9 @@ fn generate<'c>(
         let counts = ctx.output("vpl counts", 4 * n)?;
         let prefix = ctx.output("vpl prefix", 4 * n)?;
         let total = ctx.output("vpl total", 16)?;
-        let bind = ctx.bind_group(
-            &paths_kernel,
-            vec![
-                params.as_entire_binding(),
-                scene.nodes.as_entire_binding(),
-                scene.tris.as_entire_binding(),
-                surfaces.shade.as_entire_binding(),
-                surfaces.materials.as_entire_binding(),
-                surfaces.texels.as_entire_binding(),
-                lights.binding(),
-                slots.binding(),
-                counts.binding(),
-            ],
-        );
+        let mut resources = surfaces.bindings(&params, &scene);
+        resources.extend([lights.binding(), slots.binding(), counts.binding()]);
+        let bind = ctx.bind_group(&paths_kernel, resources);
         let mut batch = Batch::new(ctx);
         batch.dispatch("vpl paths", &paths_kernel, &bind, n as usize)?;
         crate::scan::record(ctx, &mut batch, &counts, &prefix, &total, n as usize, false)?;
@@ -267,7 +256,7 @@ fn generate<'c>(
 /// `Ok(None)` (the CPU traces them) for independent random path numbers
 /// ([`PathNumbers::Random`]), or where the scene or the VPLs do not fit the adapter's
 /// buffers. With `for_grid` (a method that builds a hierarchy over them) the VPLs are also
-/// kept on the GPU for the build ([`resident`]).
+/// kept on the GPU for the build (the module `resident`).
 ///
 /// # Errors
 /// No adapter, or the GPU failed.

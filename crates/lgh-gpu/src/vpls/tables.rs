@@ -23,7 +23,7 @@ fn word(v: Vec3, w: f32) -> [u32; 4] {
     [v.x, v.y, v.z, w].map(f32::to_bits)
 }
 
-/// The tables of `world`: 16 Sobol direction vectors, then [`LIGHT_WORDS`] words per light
+/// The tables of `world`: 16 Sobol direction vectors, then six words per light
 /// (punctual lights first, then emitters, as the CPU numbers them): (kind, probability, the
 /// normalised cumulative weight as a high and a low `f32`), then the light's own data.
 /// `None` if nothing emits.
