@@ -11,8 +11,10 @@
 //! ```
 //!
 //! A method that computes all reflected light itself (a path tracer,
-//! [`Illumination::AllReflected`]) skips the VPLs and the direct pass. Nothing below this
-//! module imports it.
+//! [`Illumination::AllReflected`]) skips the VPLs and the direct pass. A method may run the
+//! G-buffer, the VPLs, the direct pass and the edge resolve on its own backend (the hooks
+//! of [`crate::methods::IndirectMethod`]; lgh-gpu's methods run them on the GPU); where it
+//! does not, the passes above run here. Nothing below this module imports it.
 
 use std::time::Instant;
 
