@@ -186,12 +186,17 @@ pub fn padded_boxes(mesh: &Mesh) -> Vec<Aabb> {
         .collect()
 }
 
+/// How far outside a triangle, in barycentric units, a hit still counts (see
+/// [`closed_hit`]): a millionth of the triangle, far below a pixel.
+const EDGE_SLACK: f32 = 1e-6;
+
 /// The distance to `tri` along `ray` within [t_min, t_max], or infinity: obvhs's
 /// Moller-Trumbore test (`RtTriangle::intersect`, the same arithmetic) with its edges
-/// closed. obvhs rejects a barycentric of -0.0 (it tests sign bits), and a ray through
-/// the edge two triangles share can get -0.0 from both, so that it falls through the
-/// surface: on a glTF box seen head-on, 2 pixels of 2,304 saw the box's far side, and
-/// of 486 rays through the diagonal of a quad seen from its back, 390 (the test below).
+/// closed. obvhs rejects a barycentric of -0.0 (it tests sign bits), so a ray through the
+/// edge two triangles share can miss both (390 of 486 rays through a quad's diagonal seen
+/// from its back, the test below); and rounding can make both barycentrics slightly
+/// negative (a glTF box seen head-on showed its far side at 2 pixels of 2,304). Hits up to
+/// [`EDGE_SLACK`] outside a triangle count, which closes both kinds of crack.
 #[inline]
 fn closed_hit(tri: &RtTriangle, ray: &Ray) -> f32 {
     let c = tri.v0 - ray.origin;
@@ -200,7 +205,7 @@ fn closed_hit(tri: &RtTriangle, ray: &Ray) -> f32 {
     let u = r.dot(tri.e2) * inv_det;
     let v = r.dot(tri.e1) * inv_det;
     let w = 1.0 - u - v;
-    if inv_det != 0.0 && u >= 0.0 && v >= 0.0 && w >= 0.0 {
+    if inv_det != 0.0 && u >= -EDGE_SLACK && v >= -EDGE_SLACK && w >= -EDGE_SLACK {
         let t = tri.ng.dot(c) * inv_det;
         if t >= ray.tmin && t <= ray.tmax {
             return t;
