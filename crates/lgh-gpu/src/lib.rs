@@ -96,7 +96,7 @@ macro_rules! gpu_frame_passes {
 }
 pub(crate) use gpu_frame_passes;
 
-/// A kernel's WGSL: the shared declarations (`shaders/common.wgsl`: the G-buffer's `Pixel`,
+/// A kernel's WGSL: the shared declarations (`shaders/common.wgsl`: the G-buffer's `Pixel`, `Vpl`,
 /// `luminance`, `hash`, `PI`) followed by `parts` (the kernel, and `shaders/bvh.wgsl` for the
 /// kernels that trace rays).
 pub(crate) fn kernel(parts: &[&str]) -> String {

@@ -12,6 +12,14 @@ struct Pixel {
     albedo: vec4<f32>,
 }
 
+// A VPL as the kernels that read or write VPLs hold it (brute force, light paths):
+// position, normal and flux, w unused.
+struct Vpl {
+    position: vec4<f32>,
+    normal: vec4<f32>,
+    flux: vec4<f32>,
+}
+
 // lgh_core::color::luminance.
 fn luminance(c: vec3<f32>) -> f32 {
     return dot(c, vec3<f32>(0.299, 0.587, 0.114));

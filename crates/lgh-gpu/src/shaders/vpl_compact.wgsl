@@ -11,12 +11,6 @@ struct Params {
     target_count: u32,
 }
 
-struct Vpl {
-    position: vec4<f32>,
-    normal: vec4<f32>,
-    flux: vec4<f32>,
-}
-
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> slots: array<Vpl>;
 @group(0) @binding(2) var<storage, read> counts: array<u32>;

@@ -20,12 +20,6 @@ struct Params {
     seeds: array<vec4<u32>, 64>,
 }
 
-struct Vpl {
-    position: vec4<f32>,
-    normal: vec4<f32>,
-    flux: vec4<f32>,
-}
-
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> nodes: array<Node>;
 @group(0) @binding(2) var<storage, read> tris: array<vec4<f32>>;
