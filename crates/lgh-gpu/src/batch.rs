@@ -114,6 +114,13 @@ impl<'c> Batch<'c> {
         self.kept.push(lease);
     }
 
+    /// Records the copy of `bytes` of `from` (from byte `from_at`) into `to` (at byte
+    /// `to_at`); offsets and size are multiples of 4.
+    pub fn copy(&mut self, from: &Lease<'_>, from_at: u64, to: &Lease<'_>, to_at: u64, bytes: u64) {
+        self.enc
+            .copy_buffer_to_buffer(from.buffer(), from_at, to.buffer(), to_at, bytes);
+    }
+
     /// Records the zeroing of `buffer`.
     pub fn clear(&mut self, buffer: &wgpu::Buffer) {
         self.enc.clear_buffer(buffer, 0, None);

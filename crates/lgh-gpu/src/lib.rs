@@ -32,6 +32,7 @@ pub mod surfaces;
 pub mod vpls;
 
 pub mod atrous;
+pub mod bins;
 pub mod brute;
 pub mod direct;
 pub mod edges;

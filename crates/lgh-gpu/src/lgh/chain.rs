@@ -9,6 +9,7 @@ use lgh_render::methods::lgh::tables::LghTables;
 use lgh_render::shading::ratio::{RatioFilter, Shadowed};
 
 use super::{Loop, gpu_timings, record_loop};
+use crate::bins::GpuBins;
 use crate::context::{GpuContext, GpuError};
 use crate::ratio::{self, Frame};
 
@@ -21,6 +22,7 @@ pub(super) fn shade(
     ctx: &GpuContext,
     inputs: &MethodInputs,
     tables: &LghTables,
+    bins: Option<GpuBins<'_>>,
     filter: &RatioFilter,
 ) -> Result<(Shadowed, Vec<u32>, Timings), GpuError> {
     let g = inputs.gbuffer;
@@ -30,8 +32,9 @@ pub(super) fn shade(
         gbuffer,
         start,
         upload_ms,
+        counts_ms,
         ..
-    } = record_loop(ctx, inputs, tables)?;
+    } = record_loop(ctx, inputs, tables, bins)?;
     let frame = Frame {
         gbuffer: &gbuffer,
         g,
@@ -43,7 +46,7 @@ pub(super) fn shade(
     let (reads, gpu) = batch.finish()?;
     let planes: &[[Vec4; 3]] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
     let (shadowed, overdraw, composite_ms) = ratio::unpack(planes, tables.k, g);
-    let mut t = gpu_timings(&gpu, start, upload_ms, composite_ms);
+    let mut t = gpu_timings(&gpu, start, upload_ms, composite_ms, counts_ms);
     t.push("composite", composite_ms);
     Ok((shadowed, overdraw, t))
 }

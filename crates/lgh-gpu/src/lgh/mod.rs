@@ -34,6 +34,7 @@ use lgh_render::shading::shadow_pass::ShadowEstimates;
 use rayon::prelude::*;
 
 use crate::batch::{Batch, PassTimes};
+use crate::bins::GpuBins;
 use crate::context::{GpuContext, GpuError};
 use crate::gbuffer::GpuGBuffer;
 use crate::pool::Lease;
@@ -86,11 +87,21 @@ impl IndirectMethod for GpuLgh {
         let prepared = LghFrame::prepare_with(inputs, shadowed, memory, true, Some(&mut builder))
             .map_err(|e| RenderError::Backend(e.to_string()))?;
         drop(builder);
-        let frame = match prepared {
+        let mut frame = match prepared {
             Prepared::Dark(output) => return Ok(output),
             Prepared::Frame(frame) => frame,
         };
         let g = inputs.gbuffer;
+        // The tile binning on the GPU; lists larger than its buffers on the CPU.
+        let gbuffer = ctx.gbuffer(g).map_err(fail)?;
+        let bins = match crate::bins::record(ctx, g, inputs.camera, &gbuffer, &frame.spheres()) {
+            Ok(bins) => Some(bins),
+            Err(GpuError::TooLarge(_)) => {
+                frame.bin_on_cpu(inputs, memory);
+                None
+            }
+            Err(e) => return Err(fail(e)),
+        };
         let tables = frame.tables(g.width, g.height).ok_or_else(|| {
             RenderError::Backend("lgh on the GPU: the hierarchies' tables are missing".into())
         })?;
@@ -98,10 +109,10 @@ impl IndirectMethod for GpuLgh {
         if crate::ratio::supported(&filter) {
             // The loop, the blur and the ratio estimator in one submission.
             let (shadowed, overdraw, timings) =
-                chain::shade(ctx, inputs, &tables, &filter).map_err(fail)?;
+                chain::shade(ctx, inputs, &tables, bins, &filter).map_err(fail)?;
             return Ok(frame.finish_shadowed(inputs, shadowed, overdraw, timings));
         }
-        let shaded = lighting_loop(ctx, inputs, &tables).map_err(fail)?;
+        let shaded = lighting_loop(ctx, inputs, &tables, bins).map_err(fail)?;
         Ok(frame.finish_with(inputs, shaded, memory, Some(gpu_atrous)))
     }
 }
@@ -165,25 +176,43 @@ pub(super) struct Loop<'c> {
     /// When the frame's GPU work began, and the milliseconds spent packing and uploading.
     pub start: Instant,
     pub upload_ms: f64,
+    /// The milliseconds of the tile binning's first submission ([`GpuBins::counts_ms`]).
+    pub counts_ms: f64,
 }
 
-/// Packs and uploads the loop's inputs `tables` and records the loop (timed "lighting").
+/// Packs and uploads the loop's inputs `tables` and records the loop (timed "lighting")
+/// after the passes of the GPU's tile `bins` (the CPU's bins in `tables` without them).
 pub(super) fn record_loop<'c>(
     ctx: &'c GpuContext,
     inputs: &MethodInputs,
     tables: &LghTables,
+    bins: Option<GpuBins<'c>>,
 ) -> Result<Loop<'c>, GpuError> {
     let start = Instant::now();
     let g = inputs.gbuffer;
     let n = g.len();
     let scene = ctx.scene(inputs.world)?;
     let packed = Tables::new(tables)?;
-    let params = Params::new(inputs, tables, &packed)?;
+    let (mut batch, lists, layout, counts_ms) = match (bins, &tables.bins) {
+        (Some(b), _) => (b.batch, b.lists, b.layout, b.counts_ms),
+        (None, Some(flat)) => (
+            Batch::new(ctx),
+            ctx.upload_parts("light lists", &packed.list_parts(flat))?,
+            Tables::list_layout(flat),
+            0.0,
+        ),
+        (None, None) => {
+            return Err(GpuError::Failed(
+                "lgh on the GPU: the lights are not binned".into(),
+            ));
+        }
+    };
+    let params = Params::new(inputs, tables, &packed, layout)?;
     let params = ctx.uniform("lgh params", &params);
     let gbuffer = ctx.gbuffer(g)?;
     let buffers = vec![
         ctx.upload("lights", &packed.lights)?,
-        ctx.upload_parts("light lists", &packed.list_parts(tables))?,
+        lists,
         ctx.upload_parts("hierarchy tables", &packed.word_parts(tables))?,
         ctx.upload("representatives", &packed.reps)?,
     ];
@@ -194,7 +223,6 @@ pub(super) fn record_loop<'c>(
     resources.extend(buffers.iter().map(Lease::binding));
     resources.push(out.binding());
     let bind = ctx.bind_group(&pipeline, resources);
-    let mut batch = Batch::new(ctx);
     batch.dispatch("lighting", &pipeline, &bind, n)?;
     for lease in buffers {
         batch.keep(lease);
@@ -205,6 +233,7 @@ pub(super) fn record_loop<'c>(
         gbuffer,
         start,
         upload_ms: start.elapsed().as_secs_f64() * 1e3,
+        counts_ms,
     })
 }
 
@@ -212,8 +241,18 @@ pub(super) fn record_loop<'c>(
 /// time since `start` less `cpu_ms` (CPU work timed apart) and "gpu_upload" its part before
 /// the submission (`upload_ms`: packing and writing the tables); without timestamps,
 /// "lighting" stands for all of the GPU's work.
-pub(super) fn gpu_timings(gpu: &PassTimes, start: Instant, upload_ms: f64, cpu_ms: f64) -> Timings {
+pub(super) fn gpu_timings(
+    gpu: &PassTimes,
+    start: Instant,
+    upload_ms: f64,
+    cpu_ms: f64,
+    counts_ms: f64,
+) -> Timings {
     let mut t = Timings::default();
+    if counts_ms > 0.0 {
+        // The tile binning's first submission, before `start`.
+        t.push("tile_counts", counts_ms);
+    }
     let wall = start.elapsed().as_secs_f64() * 1e3 - cpu_ms;
     if gpu.is_empty() {
         t.push("lighting", (wall - upload_ms).max(0.0));
@@ -237,10 +276,11 @@ pub(super) fn gpu_timings(gpu: &PassTimes, start: Instant, upload_ms: f64, cpu_m
 /// The lighting loop of the frame whose inputs are `tables`, on the GPU, read back for the
 /// CPU's blur and ratio estimator: A, the overdraw, S and U of every pixel, with the
 /// timings of [`gpu_timings`].
-fn lighting_loop(
-    ctx: &GpuContext,
+fn lighting_loop<'c>(
+    ctx: &'c GpuContext,
     inputs: &MethodInputs,
     tables: &LghTables,
+    bins: Option<GpuBins<'c>>,
 ) -> Result<LoopResult, GpuError> {
     let n = inputs.gbuffer.len();
     let Loop {
@@ -248,8 +288,9 @@ fn lighting_loop(
         out,
         start,
         upload_ms,
+        counts_ms,
         ..
-    } = record_loop(ctx, inputs, tables)?;
+    } = record_loop(ctx, inputs, tables, bins)?;
     batch.read(out.buffer(), out.bytes())?;
     let (reads, gpu) = batch.finish()?;
     let result: &[Vec4] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
@@ -270,6 +311,6 @@ fn lighting_loop(
             u: plane(2),
             rays: result.par_chunks(3).map(|p| p[1].w as u64).sum(),
         },
-        timings: gpu_timings(&gpu, start, upload_ms, 0.0),
+        timings: gpu_timings(&gpu, start, upload_ms, 0.0, counts_ms),
     })
 }

@@ -8,6 +8,9 @@ use rayon::prelude::*;
 
 use lgh_core::lighting_grid::representative::SLOTS;
 
+use lgh_render::shading::tiles::FlatBins;
+
+use crate::bins::ListLayout;
 use crate::context::GpuError;
 
 /// Hierarchies the uniform holds (the six normal bins, and room).
@@ -57,7 +60,8 @@ pub(super) struct Tables {
     /// Per shaded light: position and reach^2, normal and isotropic share, intensity and
     /// radius, blending floors with level and vertex x.
     pub(super) lights: Vec<[Vec4; 4]>,
-    /// The pixels in the order the invocations take them ([`pixel_order`]).
+    /// The pixels in the order the invocations take them ([`pixel_order`]), where the CPU
+    /// binned the lights.
     order: Vec<u32>,
     /// Per hierarchy, its descent children as (child, bits of the running sum).
     children: Vec<Vec<u32>>,
@@ -91,7 +95,9 @@ impl Tables {
                 ]
             })
             .collect();
-        let order = pixel_order(&t.bins.list, t.bins.offsets.len().saturating_sub(1));
+        let order = t.bins.as_ref().map_or_else(Vec::new, |b| {
+            pixel_order(&b.list, b.offsets.len().saturating_sub(1))
+        });
         let (mut words, mut reps, mut hier, mut children) =
             (0usize, Vec::new(), Vec::new(), Vec::new());
         for h in &t.hierarchies {
@@ -152,16 +158,28 @@ impl Tables {
         })
     }
 
-    /// The lists buffer of the frame whose tables are `t` (these packed from them): the
-    /// lists' starts, then their lights, then the pixels in the order the invocations take
-    /// them, then each pixel's list.
-    pub(super) fn list_parts<'s>(&'s self, t: &'s LghTables) -> Vec<&'s [u8]> {
+    /// The lists buffer of the CPU's bins `bins` (these tables packed with them), laid out
+    /// as [`ListLayout`]: the lists' starts, then their lights, then the pixels in the order
+    /// the invocations take them, then each pixel's list.
+    pub(super) fn list_parts<'s>(&'s self, bins: &'s FlatBins) -> Vec<&'s [u8]> {
         vec![
-            bytemuck::cast_slice(&t.bins.offsets),
-            bytemuck::cast_slice(&t.bins.lights),
+            bytemuck::cast_slice(&bins.offsets),
+            bytemuck::cast_slice(&bins.lights),
             bytemuck::cast_slice(&self.order),
-            bytemuck::cast_slice(&t.bins.list),
+            bytemuck::cast_slice(&bins.list),
         ]
+    }
+
+    /// Where the parts of [`Tables::list_parts`] start.
+    pub(super) fn list_layout(bins: &FlatBins) -> ListLayout {
+        let lights = bins.offsets.len() as u32;
+        let order = lights + bins.lights.len() as u32;
+        ListLayout {
+            lists: lights.saturating_sub(1),
+            lights,
+            order,
+            pixel_lists: order + bins.list.len() as u32,
+        }
     }
 
     /// The hierarchy buffer (words): per hierarchy its vertex-row starts of levels
@@ -180,10 +198,14 @@ impl Tables {
 }
 
 impl Params {
-    /// The uniform of a frame with inputs `i`, loop inputs `t` and packed tables `p`.
-    pub(super) fn new(i: &MethodInputs, t: &LghTables, p: &Tables) -> Result<Self, GpuError> {
-        let order = (t.bins.offsets.len() + t.bins.lights.len()) as u32;
-        let pixel_lists = order + t.bins.list.len() as u32;
+    /// The uniform of a frame with inputs `i`, loop inputs `t`, packed tables `p` and lists
+    /// laid out as `lists`.
+    pub(super) fn new(
+        i: &MethodInputs,
+        t: &LghTables,
+        p: &Tables,
+        lists: ListLayout,
+    ) -> Result<Self, GpuError> {
         let mut hier = [Hier::default(); MAX_HIERARCHIES];
         hier[..p.hier.len()].copy_from_slice(&p.hier);
         let seed = i.settings.seed;
@@ -192,9 +214,9 @@ impl Params {
                 .map_err(|_| GpuError::TooLarge("pixels".into()))?,
             k: t.k,
             hierarchies: p.hier.len() as u32,
-            list_lights: t.bins.offsets.len() as u32,
-            order,
-            pixel_lists,
+            list_lights: lists.lights,
+            order: lists.order,
+            pixel_lists: lists.pixel_lists,
             eps2: t.eps2,
             ray_eps: i.world.ray_epsilon,
             seed_lo: seed as u32,

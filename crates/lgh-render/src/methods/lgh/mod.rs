@@ -61,7 +61,7 @@ pub mod settings;
 mod shade;
 pub mod tables;
 
-pub use prepared::{LghFrame, LoopResult, Prepared};
+pub use prepared::{LghFrame, LightSpheres, LoopResult, Prepared};
 pub use settings::{
     DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, INTERACTIVE_INTERLEAVE, JitterAt,
     LghSettings, ShadowTarget, auto_tile,

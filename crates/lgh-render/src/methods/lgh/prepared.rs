@@ -50,7 +50,11 @@ pub enum Prepared {
 /// the ratio estimator need.
 pub struct LghFrame {
     pub(super) lights: ShadeLights,
-    pub(super) bins: InterleavedBins,
+    /// The tile bins: made by [`LghFrame::prepare`] for the CPU's loop; for a backend's
+    /// (`tables`), by that backend or by [`LghFrame::bin_on_cpu`].
+    pub(super) bins: Option<InterleavedBins>,
+    /// The tile edge in sub-image pixels.
+    tile: u32,
     pub(super) packed: Vec<PackedLight>,
     pub(super) stats: LghStats,
     timings: Timings,
@@ -61,6 +65,45 @@ pub struct LghFrame {
     /// Interleaving n.
     pub(super) n: u32,
     pub(super) eps2: f32,
+}
+
+/// The shaded lights as the tile binning reads them ([`LghFrame::spheres`]).
+#[derive(Clone, Copy, Debug)]
+pub struct LightSpheres<'a> {
+    /// Centres.
+    pub centres: &'a [Vec3],
+    /// Radii of influence.
+    pub radii: &'a [f32],
+    /// Sub-image of each light.
+    pub sub: &'a [u16],
+    /// Interleaving n.
+    pub n: u32,
+    /// Tile edge in sub-image pixels.
+    pub tile: u32,
+}
+
+/// The lights of `lights` binned into tiles of `tile` sub-image pixels over the frame of
+/// `inputs` under `n` x `n` interleaving, with the tile bounds kept in `memory` while the
+/// view stands still.
+fn bin(
+    lights: &ShadeLights,
+    inputs: &MethodInputs,
+    memory: &mut FrameMemory,
+    n: u32,
+    tile: u32,
+) -> InterleavedBins {
+    let g = inputs.gbuffer;
+    let bounds = memory
+        .tile_bounds
+        .get_or_insert_with(g, [n, tile, 0, 0], || AllBounds::new(g, n, tile * n));
+    InterleavedBins::from_bounds(
+        g,
+        inputs.camera,
+        bounds,
+        &lights.position,
+        &lights.reach,
+        &lights.sub,
+    )
 }
 
 /// What a lighting loop gives for every pixel ([`LghFrame::shade`] on the CPU): the
@@ -84,8 +127,9 @@ impl LghFrame {
     /// roles, what the shadow targets need (representatives, or the unbiased estimate's
     /// walks), and the lights binned into screen tiles. With `tables`, each hierarchy's
     /// lookup tables are kept for [`LghFrame::tables`] (a backend that runs the loop
-    /// elsewhere), and the CPU's copies of the representatives are not made: such a frame is
-    /// not for [`LghFrame::shade`].
+    /// elsewhere), the CPU's copies of the representatives are not made (such a frame is
+    /// not for [`LghFrame::shade`]), and the lights are not binned: the backend bins them
+    /// ([`LghFrame::spheres`]) or asks the CPU to ([`LghFrame::bin_on_cpu`]).
     ///
     /// # Errors
     /// The VPLs cannot form a hierarchy (non-finite values).
@@ -112,7 +156,6 @@ impl LghFrame {
     ) -> Result<Prepared, GridError> {
         let MethodInputs {
             gbuffer: g,
-            camera: frame,
             vpls,
             settings: all,
             ..
@@ -206,22 +249,13 @@ impl LghFrame {
             lights.show_only_level(level);
         }
         let tile = all.tiling.tile.unwrap_or_else(|| auto_tile(n)).max(1);
-        let bounds = memory
-            .tile_bounds
-            .get_or_insert_with(g, [n, tile, 0, 0], || AllBounds::new(g, n, tile * n));
-        let bins = InterleavedBins::from_bounds(
-            g,
-            frame,
-            bounds,
-            &lights.position,
-            &lights.reach,
-            &lights.sub,
-        );
+        let bins = (!tables).then(|| bin(&lights, inputs, memory, n, tile));
         let packed = lights.packed(n2 as f32);
         lighting_ms += start.elapsed().as_secs_f64() * 1e3;
         Ok(Prepared::Frame(Box::new(Self {
             lights,
             bins,
+            tile,
             packed,
             stats,
             timings: t,
@@ -230,6 +264,31 @@ impl LghFrame {
             n,
             eps2: inputs.eps() * inputs.eps(),
         })))
+    }
+
+    /// Bins the shaded lights into screen tiles on the CPU, for a frame prepared with
+    /// `tables` whose backend does not bin them itself; nothing if they are binned.
+    pub fn bin_on_cpu(&mut self, inputs: &MethodInputs, memory: &mut FrameMemory) {
+        if self.bins.is_none() {
+            let start = Instant::now();
+            self.bins = Some(bin(&self.lights, inputs, memory, self.n, self.tile));
+            self.lighting_ms += start.elapsed().as_secs_f64() * 1e3;
+        }
+    }
+
+    /// What the tile binning reads, for a backend that bins the lights itself: light i is a
+    /// sphere (`centres[i]`, `radii[i]`; infinite radius: everywhere, negative or NaN:
+    /// nowhere) of sub-image `sub[i]`, binned into tiles of `tile` sub-image pixels under
+    /// `n` x `n` interleaving ([`InterleavedBins::build`]).
+    #[must_use]
+    pub fn spheres(&self) -> LightSpheres<'_> {
+        LightSpheres {
+            centres: &self.lights.position,
+            radii: &self.lights.reach,
+            sub: &self.lights.sub,
+            n: self.n,
+            tile: self.tile,
+        }
     }
 
     /// The lighting loop on the CPU (section 3.2 and Appendix A) and the shadow rays (3.3):
@@ -248,9 +307,23 @@ impl LghFrame {
         let representative = settings.shadow_target == ShadowTarget::Representative;
         // Per pixel: A and overdraw; and k reservoirs.
         let mut shaded: Vec<(Vec3, u32)> = par_filled(g.len(), (Vec3::ZERO, 0));
+        let binned;
+        let bins = match &self.bins {
+            Some(b) => b,
+            None => {
+                binned = bin(
+                    &self.lights,
+                    inputs,
+                    &mut FrameMemory::default(),
+                    self.n,
+                    self.tile,
+                );
+                &binned
+            }
+        };
         let ctx = RowContext {
             g,
-            bins: &self.bins,
+            bins,
             packed: &self.packed,
             lights: &self.lights,
             settings,
@@ -268,8 +341,7 @@ impl LghFrame {
             eps2: self.eps2,
         };
         // One row of tiles per call, so that a tile's light batch serves all its rows.
-        let pass =
-            ShadowPass::new(world, g, k, seed).with_group_rows(self.bins.tile_pixels() as usize);
+        let pass = ShadowPass::new(world, g, k, seed).with_group_rows(bins.tile_pixels() as usize);
         let (estimates, times) = pass.shade_in_bands(
             &mut shaded,
             RowScratch::default,

@@ -98,8 +98,9 @@ pub struct HierarchyTables<'a> {
 pub struct LghTables<'a> {
     /// The shaded lights (intensities times n^2 for n x n interleaving).
     pub lights: &'a [PackedLight],
-    /// The light list of every pixel.
-    pub bins: FlatBins,
+    /// The light list of every pixel; `None` if the frame's lights are not binned on the
+    /// CPU ([`LghFrame::bin_on_cpu`]).
+    pub bins: Option<FlatBins>,
     /// Per hierarchy, the unbiased estimate's tables (empty without shadow samples).
     pub hierarchies: Vec<HierarchyTables<'a>>,
     /// Shadow samples per pixel.
@@ -129,7 +130,7 @@ impl LghFrame {
         }
         Some(LghTables {
             lights: &self.packed,
-            bins: self.bins.flatten(width, height),
+            bins: self.bins.as_ref().map(|b| b.flatten(width, height)),
             hierarchies,
             k: self.k as u32,
             n: self.n,

@@ -1,0 +1,78 @@
+// The bounds of every list's tile (lgh-render's AllBounds::new), one invocation a list, its
+// pixels in the CPU's order (row by row): the depth range of the pixels that see a surface,
+// then per depth slice the box, the first normal n_s, the spread and the plane. Minima and
+// maxima do not depend on the order; the first normal is the CPU's since the order is.
+
+@group(0) @binding(0) var<uniform> P: BinParams;
+@group(0) @binding(1) var<storage, read> gbuffer: array<Pixel>;
+@group(0) @binding(2) var<storage, read_write> bounds: array<TileBounds>;
+
+// a / b correctly rounded, as the CPU divides (WGSL's division may be 2.5 ulp off, and the
+// quotient picks a slice).
+fn div_rn1(a: f32, b: f32) -> f32 {
+    var r = 1.0 / b;
+    r = fma(fma(-b, r, 1.0), r, r);
+    let q = a * r;
+    return fma(fma(-q, b, a), r, q);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) nw: vec3<u32>) {
+    for (var l = id.x; l < P.lists; l += nw.x * 64u) {
+        let t = list_tile(l);
+        let sx = t.z % P.n;
+        let sy = t.z / P.n;
+        let x0 = t.x * P.tile + sx;
+        let x1 = min((t.x + 1u) * P.tile, P.width);
+        let y0 = t.y * P.tile + sy;
+        let y1 = min((t.y + 1u) * P.tile, P.height);
+        var zmin = 0.0;
+        var zmax = 0.0;
+        var seen = false;
+        for (var y = y0; y < y1; y += P.n) {
+            for (var x = x0; x < x1; x += P.n) {
+                let p = gbuffer[y * P.width + x];
+                if (p.position.w > 0.5) {
+                    let z = p.albedo.w;
+                    if (seen) {
+                        zmin = min(zmin, z);
+                        zmax = max(zmax, z);
+                    } else {
+                        zmin = z;
+                        zmax = z;
+                        seen = true;
+                    }
+                }
+            }
+        }
+        var b: TileBounds;
+        b.z = vec4<f32>(zmin, zmax, select(0.0, 1.0, seen), 0.0);
+        let span = zmax - zmin;
+        for (var y = y0; y < y1 && seen; y += P.n) {
+            for (var x = x0; x < x1; x += P.n) {
+                let p = gbuffer[y * P.width + x];
+                if (p.position.w <= 0.5) {
+                    continue;
+                }
+                var k = 0u;
+                if (span > 0.0) {
+                    k = min(u32(div_rn1(p.albedo.w - zmin, span) * f32(SLICES)), SLICES - 1u);
+                }
+                let x_ = p.position.xyz;
+                let n = p.normal.xyz;
+                if (b.lo[k].w == 0.0) {
+                    // The slice's first point sets its normal.
+                    b.lo[k] = vec4<f32>(x_, 1.0);
+                    b.hi[k] = vec4<f32>(x_, 0.0);
+                    b.normal[k] = vec4<f32>(n, dot(n, x_));
+                } else {
+                    let ns = b.normal[k].xyz;
+                    b.lo[k] = vec4<f32>(min(b.lo[k].xyz, x_), 1.0);
+                    b.hi[k] = vec4<f32>(max(b.hi[k].xyz, x_), max(b.hi[k].w, length(n - ns)));
+                    b.normal[k].w = min(b.normal[k].w, dot(ns, x_));
+                }
+            }
+        }
+        bounds[l] = b;
+    }
+}
