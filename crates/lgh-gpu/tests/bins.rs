@@ -16,13 +16,19 @@ use common::{SCENES, world};
 
 /// The GPU's lists buffer of `world`'s lgh frame at `w` x `h` with `n` x `n` interleaving,
 /// as (starts, lights, pixel order, pixel lists), and the CPU's bins of the same lights.
-fn both(world: &World, (w, h): (u32, u32), n: u32, jitter: Vec2) -> ([Vec<u32>; 4], FlatBins) {
+fn both(
+    world: &World,
+    (w, h): (u32, u32),
+    (n, tile): (u32, Option<u32>),
+    jitter: Vec2,
+) -> ([Vec<u32>; 4], FlatBins) {
     let s = RenderSettings {
         width: w,
         height: h,
         vpls: 4000,
         tiling: lgh_render::settings::Tiling {
             interleave: Some(n),
+            tile,
             ..Default::default()
         },
         ..RenderSettings::default()
@@ -126,12 +132,16 @@ fn gpu_tile_bins_are_the_cpu_ones() {
     for rel in SCENES {
         let world = world(rel);
         for (size, n, jitter) in [
-            ((96, 54), 1, Vec2::ZERO),
-            ((96, 54), 4, Vec2::new(-0.27, 0.38)),
-            ((101, 37), 2, Vec2::ZERO),
+            ((96, 54), (1, None), Vec2::ZERO),
+            ((96, 54), (4, None), Vec2::new(-0.27, 0.38)),
+            ((101, 37), (2, None), Vec2::ZERO),
+            // Tiles of one pixel, and images smaller than a tile (sub-images without pixels).
+            ((23, 11), (1, Some(1)), Vec2::ZERO),
+            ((5, 3), (4, None), Vec2::ZERO),
         ] {
             let (gpu, cpu) = both(&world, size, n, jitter);
-            longest = longest.max(check(&format!("{rel:?} {size:?} n = {n}"), &gpu, &cpu));
+            let label = format!("{rel:?} {size:?} (n, tile) = {n:?}");
+            longest = longest.max(check(&label, &gpu, &cpu));
         }
     }
     // Both sorts ran: lists longer than the workgroup's 2,048 keys sort in place.
@@ -149,7 +159,7 @@ fn gpu_tile_bins_are_the_cpu_ones_on_the_shared_scenes() {
             .join(format!("../../scenes/{name}.toml"));
         let world = World::new(lgh_scene::load(&path).expect("scene"));
         for n in [1, 4] {
-            let (gpu, cpu) = both(&world, (160, 90), n, Vec2::ZERO);
+            let (gpu, cpu) = both(&world, (160, 90), (n, None), Vec2::ZERO);
             check(&format!("{name} n = {n}"), &gpu, &cpu);
         }
     }
