@@ -14,8 +14,8 @@
 //! integer prefix sum, [`scan`]). The frame's passes before shading run here too: primary
 //! rays into the G-buffer ([`primary`], with the scene's [`surfaces`]), VPL generation by
 //! light tracing with the CPU's Sobol numbers ([`vpls`]), and the edge resolve's sub-pixel
-//! samples ([`edges`]). The unbiased estimate's other tables, the tile binning and the
-//! composite run on the CPU.
+//! samples ([`edges`]), and the tile binning of lgh's shaded lights ([`bins`]). The
+//! unbiased estimate's other tables and the composite run on the CPU.
 //!
 //! The GPU methods are [`lgh_render::Method`]s like the CPU's: `render_frame` runs them with
 //! the same settings and gives the same `Frame`. Results are deterministic: every pixel sums

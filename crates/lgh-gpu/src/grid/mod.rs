@@ -4,7 +4,7 @@
 //! below (`lgh_core`'s [`Construction::Restrict`], which equals the all-scatter
 //! hierarchy), the number of levels by the paper's rule (section 4.3,
 //! [`lighting_grid::level_rule`]). The result is read back as a [`LightingGrid`] for the
-//! steps that still run on the CPU (representatives, tables, binning).
+//! steps that still run on the CPU (the shaded lights, the unbiased estimate's tables).
 //!
 //! The passes (`shaders/grid/`), with the grid placed as the CPU places it
 //! ([`lighting_grid::bounds`], [`lighting_grid::shifted_bounds`]):

@@ -4,9 +4,10 @@
 //! light, a representative VPL by contribution) and one shadow ray each through the uploaded
 //! BVH, giving S and U.
 //!
-//! The hierarchies are built on the GPU ([`crate::grid`]) and read back; the other steps
-//! before the loop run on the CPU, as the CPU method runs them ([`LghFrame::prepare_with`]:
-//! representatives, tile binning), and the loop's inputs
+//! The hierarchies are built on the GPU ([`crate::grid`]) and read back; the shaded lights
+//! and the unbiased estimate's tables are made on the CPU, as the CPU method makes them
+//! ([`LghFrame::prepare_with`]); the lights are binned into tiles on the GPU
+//! ([`crate::bins`], the CPU's lists) in the loop's submission; and the loop's other inputs
 //! go up as flat tables ([`LghFrame::tables`]); the steps after it (the interleaving blur,
 //! the ratio estimator with its a-trous filter) run on the GPU in the loop's submission
 //! ([`crate::ratio`]), and the CPU composites ([`LghFrame::finish_shadowed`]). A blur wider
