@@ -17,11 +17,7 @@ struct Params {
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> nodes: array<Node>;
-@group(0) @binding(2) var<storage, read> tris: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> shade: array<TriShade>;
-@group(0) @binding(4) var<storage, read> materials: array<Material>;
-@group(0) @binding(5) var<storage, read> texels: array<u32>;
+// Bindings 1-5: the scene's BVH and surfaces (surface.wgsl).
 @group(0) @binding(6) var<storage, read> gbuffer: array<Pixel>;
 @group(0) @binding(7) var<storage, read_write> edges: array<vec4<u32>>;
 @group(0) @binding(8) var<storage, read_write> edge_count: atomic<u32>;

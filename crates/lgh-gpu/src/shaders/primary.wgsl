@@ -6,11 +6,7 @@
 // emitted radiance towards the camera.
 
 @group(0) @binding(0) var<uniform> camera: Camera;
-@group(0) @binding(1) var<storage, read> nodes: array<Node>;
-@group(0) @binding(2) var<storage, read> tris: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> shade: array<TriShade>;
-@group(0) @binding(4) var<storage, read> materials: array<Material>;
-@group(0) @binding(5) var<storage, read> texels: array<u32>;
+// Bindings 1-5: the scene's BVH and surfaces (surface.wgsl).
 @group(0) @binding(6) var<storage, read_write> gbuffer: array<Pixel>;
 @group(0) @binding(7) var<storage, read_write> emission: array<vec4<f32>>;
 

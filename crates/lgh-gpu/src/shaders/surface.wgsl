@@ -1,7 +1,9 @@
 // The surface at a ray's hit, as lgh-render's World::surface computes it: the geometric
 // normal facing the ray, the interpolated shading normal (the geometric one where a corner
 // has none), the albedo (factor x bilinear texture, clamped to [0, 1]) and the one-sided
-// emission. Needs the bindings `shade`, `materials` and `texels` (lgh_gpu::primary).
+// emission. It declares bindings 1-5 of every kernel that includes it, in the order of
+// lgh_gpu::surfaces::GpuSurfaces::bindings: the BVH's nodes and triangles (bvh.wgsl), the
+// triangles' shading data, the materials and the texels.
 
 // One triangle's shading data, in the BVH's leaf order: the unit face normal (w: the
 // material's index, as bits) and the corners' normals and texture coordinates.
@@ -19,6 +21,12 @@ struct Material {
     albedo: vec4<f32>,
     emission: vec4<f32>,
 }
+
+@group(0) @binding(1) var<storage, read> nodes: array<Node>;
+@group(0) @binding(2) var<storage, read> tris: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> shade: array<TriShade>;
+@group(0) @binding(4) var<storage, read> materials: array<Material>;
+@group(0) @binding(5) var<storage, read> texels: array<u32>;
 
 const NO_TEXTURE: u32 = 0xffffffffu;
 // `texels` holds the sRGB decoding table (256 floats, as bits), then a header per texture
