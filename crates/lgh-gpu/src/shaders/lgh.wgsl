@@ -308,6 +308,15 @@ fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f3
     return vec4<f32>(u_k * gain, 1.0);
 }
 
+// Chunks of a pixel's list whose running weights the lighting loop keeps, so that the
+// stratified selection's second pass walks only the chunks its thresholds fall in.
+const CHUNKS: u32 = 16u;
+
+// The lights the stratified selection picked (lgh-render's MAX_SHADOW_SAMPLES at most), with
+// their contribution c and weight f.
+var<private> picked: array<u32, 16>;
+var<private> picked_cf: array<vec4<f32>, 16>;
+
 // The pixel's sums over its samples: S, U and the rays traced.
 var<private> s_sum: vec3<f32>;
 var<private> u_sum: vec3<f32>;
@@ -342,12 +351,20 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let list = lists[params.pixel_lists + i];
     let first = lists[list];
     let last = lists[list + 1u];
-    // The lighting loop: A, the overdraw and the candidates' total weight W.
+    // The lighting loop: A, the overdraw and the candidates' total weight W, with the
+    // running weight at the end of each of CHUNKS chunks of the list, and the last light
+    // with a weight.
     var a = vec3<f32>(0.0);
     var overdraw = 0u;
     var total = 0.0;
+    var ends: array<f32, CHUNKS>;
+    let size = max((last - first + CHUNKS - 1u) / CHUNKS, 1u);
+    var last_j = 0xffffffffu;
+    var last_c = vec3<f32>(0.0);
+    var last_f = 0.0;
     for (var e = first; e < last; e++) {
-        let l = lights[lists[params.list_lights + e]];
+        let j = lists[params.list_lights + e];
+        let l = lights[j];
         let d = l.position.xyz - x;
         overdraw += select(0u, 1u, dot(d, d) < l.position.w);
         let c = light_factor(l, x, n) * l.intensity.xyz;
@@ -355,7 +372,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let f = luminance(c);
         if (f > 0.0 && f < 3.0e38) {
             total += f;
+            last_j = j;
+            last_c = c;
+            last_f = f;
         }
+        ends[(e - first) / size] = total;
     }
     s_sum = vec3<f32>(0.0);
     u_sum = vec3<f32>(0.0);
@@ -365,35 +386,46 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         rng_state = hash(params.seed_lo ^ hash(params.seed_hi ^ hash(i)));
         // Stratified selection: sample s takes the light where the running weight passes
         // t_s = (s + u_s) / k W (shading.rs, stratified_picks); the second pass meets the
-        // thresholds in order.
+        // thresholds in order, walking only the chunks they fall in (at most k of the
+        // CHUNKS), from the first pass's running weight at the chunk's start.
         var s = 0u;
         var t = next_f32() / f32(k) * total;
         var acc = 0.0;
-        var last_j = 0xffffffffu;
-        var last_c = vec3<f32>(0.0);
-        var last_f = 0.0;
-        for (var e = first; e < last && s < k; e++) {
-            let j = lists[params.list_lights + e];
-            let l = lights[j];
-            let c = light_factor(l, x, n) * l.intensity.xyz;
-            let f = luminance(c);
-            if (!(f > 0.0 && f < 3.0e38)) {
+        let chunks = (last - first + size - 1u) / size;
+        for (var ch = 0u; ch < chunks && s < k; ch++) {
+            if (ends[ch] <= t) {
+                acc = ends[ch];
                 continue;
             }
-            acc += f;
-            last_j = j;
-            last_c = c;
-            last_f = f;
-            while (s < k && acc > t) {
-                take(x, n, ng, j, c, total / f);
-                s++;
-                t = (f32(s) + next_f32()) / f32(k) * total;
+            let end = min(first + (ch + 1u) * size, last);
+            for (var e = first + ch * size; e < end && s < k; e++) {
+                let j = lists[params.list_lights + e];
+                let l = lights[j];
+                let c = light_factor(l, x, n) * l.intensity.xyz;
+                let f = luminance(c);
+                if (!(f > 0.0 && f < 3.0e38)) {
+                    continue;
+                }
+                acc += f;
+                while (s < k && acc > t) {
+                    picked[s] = j;
+                    picked_cf[s] = vec4<f32>(c, f);
+                    s++;
+                    t = (f32(s) + next_f32()) / f32(k) * total;
+                }
             }
         }
         // Thresholds that rounding left beyond the last running sum take the last light.
         while (s < k && last_j != 0xffffffffu) {
-            take(x, n, ng, last_j, last_c, total / last_f);
+            picked[s] = last_j;
+            picked_cf[s] = vec4<f32>(last_c, last_f);
             s++;
+        }
+        // The picks' shadow samples, after the walk over the list: the rays and walks of
+        // the samples run apart from the list's loop.
+        for (var q = 0u; q < s; q++) {
+            let cf = picked_cf[q];
+            take(x, n, ng, picked[q], cf.xyz, total / cf.w);
         }
     }
     let kf = f32(max(k, 1u));
