@@ -12,8 +12,9 @@
 //! the whole image, so a few unlucky draws make the whole image too bright or too dark.
 //!
 //! The children of every light are kept as one list per light with running sums of the
-//! weights (compressed rows), each light's list built by its own task in a fixed order, so
-//! the result does not depend on the thread count.
+//! weights (compressed rows), built in fixed chunks of lights, each by one task in light
+//! order with one lookup of each child, and joined in chunk order, so the result does not
+//! depend on the thread count.
 
 use glam::IVec3;
 use rayon::prelude::*;
@@ -38,44 +39,40 @@ impl Descent {
     pub fn new(lookup: VertexLookup) -> Self {
         let grid = lookup.grid;
         let first_parent = grid.level_range(1).end.min(grid.len());
-        let counts: Vec<u32> = (0..grid.len())
+        // The lights of levels >= 2 in fixed chunks, each chunk's lists made by one task in
+        // light order (one pass of lookups), then joined in chunk order.
+        let parts: Vec<(Vec<u32>, Vec<Child>)> = (first_parent..grid.len())
             .into_par_iter()
-            .map(|j| {
-                let mut n = 0;
-                if j >= first_parent {
-                    for_each_child(lookup, j, |_, _| n += 1);
+            .step_by(DESCENT_CHUNK)
+            .map(|start| {
+                let end = (start + DESCENT_CHUNK).min(grid.len());
+                let mut counts = Vec::with_capacity(end - start);
+                let mut child = Vec::new();
+                for j in start..end {
+                    let before = child.len();
+                    let mut sum = 0.0;
+                    for_each_child(lookup, j, |c, w| {
+                        sum += w;
+                        child.push((c, sum));
+                    });
+                    counts.push((child.len() - before) as u32);
                 }
-                n
+                (counts, child)
             })
             .collect();
         let mut start = Vec::with_capacity(grid.len() + 1);
+        start.resize(first_parent + 1, 0u32);
         let mut at = 0u32;
-        start.push(0);
-        for n in &counts {
-            at += n;
-            start.push(at);
-        }
-        let mut child = vec![(0u32, 0.0f32); at as usize];
-        // Each light fills its own slice of `child`, in parallel.
-        let mut slices = Vec::with_capacity(grid.len());
-        let mut rest = child.as_mut_slice();
-        for n in &counts {
-            let (head, tail) = rest.split_at_mut(*n as usize);
-            slices.push(head);
-            rest = tail;
-        }
-        slices.into_par_iter().enumerate().for_each(|(j, out)| {
-            if out.is_empty() {
-                return;
+        for (counts, _) in &parts {
+            for n in counts {
+                at += n;
+                start.push(at);
             }
-            let mut k = 0;
-            let mut sum = 0.0;
-            for_each_child(lookup, j, |c, w| {
-                sum += w;
-                out[k] = (c, sum);
-                k += 1;
-            });
-        });
+        }
+        let mut child = Vec::with_capacity(at as usize);
+        for (_, c) in parts {
+            child.extend(c);
+        }
         Self { start, child }
     }
 
@@ -111,6 +108,12 @@ impl Descent {
         j
     }
 }
+
+/// A child's grid index and the running sum of the weights up to it.
+type Child = (u32, f32);
+
+/// Lights per task of [`Descent::new`].
+const DESCENT_CHUNK: usize = 2048;
 
 /// Visits the children of grid light `j` (level >= 2) with their weights w lum(I_u): the
 /// lights of the level below at the 27 vertices around twice its vertex, with the stencil
