@@ -12,6 +12,7 @@ use lgh_core::lighting_grid::partition::ShadedLevels;
 use lgh_core::lighting_grid::representative::SLOTS;
 
 use lgh_core::vpl::Vpls;
+use rayon::prelude::*;
 
 use super::LghFrame;
 use super::light_batch::PackedLight;
@@ -52,10 +53,11 @@ impl GridTables {
         Self {
             geometry: grid.geometry,
             levels,
-            vertex_x: grid.vertex.iter().map(|v| v.x).collect(),
+            vertex_x: grid.vertex.par_iter().map(|v| v.x).collect(),
             rows: (1..=grid.l_max()).map(|l| row_starts(grid, l)).collect(),
             rep_vpls: rep_vpls.collect(),
             vpls: (0..vpls.len())
+                .into_par_iter()
                 .map(|i| RepSlot {
                     position: vpls.positions[i],
                     normal: vpls.normals[i],
