@@ -69,7 +69,9 @@ pub(super) struct Hierarchy {
     /// The representatives of its S_1 lights (by grid index); empty in a frame prepared with
     /// tables (whose loop runs on another backend, reading the tables' slots).
     reps: Vec<RepSet>,
-    partition: Partition,
+    /// Lambda_i's lookup for the CPU's loop; `None` in a frame prepared with tables (the
+    /// other backend finds Lambda_i from the tables' vertex rows).
+    partition: Option<Partition>,
     pub(super) descent: Descent,
     /// Index in [`ShadeLights`] of the hierarchy's first light.
     pub(super) first: usize,
@@ -278,7 +280,7 @@ impl ShadeLights {
         let vpl_lights = if levels.lowest == 0 { vpls.len() } else { 0 };
         self.hierarchies.push(Hierarchy {
             reps,
-            partition: Partition::new(grid, levels),
+            partition: (!tables).then(|| Partition::new(grid, levels)),
             descent: Descent::new(VertexLookup::new(grid, &rows)),
             first,
             grid_base: first + vpl_lights,
@@ -490,7 +492,10 @@ impl ShadeLights {
     /// (zero where either is zero).
     fn unbiased_gain(&self, sample: &ShadowSample, xp: Vec3, nx: Vec3, eps2: f32) -> Vec3 {
         let j = sample.light as usize;
-        let lambda = self.hierarchy_of(j).partition.blend_total(xp, sample.q);
+        let Some(partition) = &self.hierarchy_of(j).partition else {
+            return Vec3::ZERO;
+        };
+        let lambda = partition.blend_total(xp, sample.q);
         let geo = light_irradiance(
             xp,
             nx,
