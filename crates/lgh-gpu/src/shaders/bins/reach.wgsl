@@ -1,6 +1,6 @@
 // Which tiles a light is listed in (lgh-render's TileBins::from_bounds): the tiles its
 // screen rectangle covers whose bounds it may reach. The count and the write kernels visit
-// the same tiles.
+// the same tiles (`visit_listings`), each with its own `listed`.
 
 @group(0) @binding(0) var<uniform> P: BinParams;
 @group(0) @binding(1) var<uniform> C: Camera;
@@ -111,4 +111,22 @@ fn may_reach(b: TileBounds, s: Span, c: vec3<f32>, r: f32) -> bool {
 // List l of tile (tx, ty) of light i's sub-image.
 fn list_of(i: u32, tx: u32, ty: u32) -> u32 {
     return (flags[i] & 0xffffu) * P.tiles_x * P.tiles_y + ty * P.tiles_x + tx;
+}
+
+// Calls `listed(i, l)` (the kernel's own) for every list l that light i is listed in, for
+// the lights i of this invocation (from `first` with the dispatch's `stride`).
+fn visit_listings(first: u32, stride: u32) {
+    for (var i = first; i < P.lights; i += stride) {
+        let s = light_span(i);
+        let c = spheres[i].xyz;
+        let r = spheres[i].w;
+        for (var ty = s.lo.y; ty <= s.hi.y; ty++) {
+            for (var tx = s.lo.x; tx <= s.hi.x; tx++) {
+                let l = list_of(i, tx, ty);
+                if (may_reach(bounds[l], s, c, r)) {
+                    listed(i, l);
+                }
+            }
+        }
+    }
 }
