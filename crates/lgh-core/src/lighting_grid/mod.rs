@@ -428,6 +428,13 @@ pub trait HierarchyBuilder: Send {
     fn representatives(&self) -> Option<&[[u32; representative::SLOTS]]> {
         None
     }
+
+    /// Whether the last build's input lights stay on the builder's device for the frame's
+    /// later passes (a GPU's lighting loop reads the representative VPLs there), so that
+    /// the caller need not keep a copy of them for those passes. The CPU's: false.
+    fn keeps_lights(&self) -> bool {
+        false
+    }
 }
 
 impl HierarchyBuilder for GridBuilder {

@@ -29,13 +29,12 @@
 use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
 
-use glam::{UVec3, Vec3};
+use glam::Vec3;
 use lgh_core::lighting_grid::representative::SLOTS;
 use lgh_core::lighting_grid::{
     self, BuildTimings, Construction, GridBuilder, GridError, GridGeometry, HierarchyBuilder,
     InputLights, LevelCount, LightingGrid, MAX_LEVELS,
 };
-use rayon::prelude::*;
 
 use crate::batch::{Batch, PassTimes};
 use crate::context::{GpuContext, GpuError};
@@ -43,9 +42,12 @@ use crate::pool::Lease;
 
 mod draw;
 mod marks;
+mod transfer;
+
+use transfer::{unpack, upload_lights};
 
 /// Floats per light in the uploaded lights: position, intensity, normal.
-const LIGHT_FLOATS: usize = 9;
+pub(crate) const LIGHT_FLOATS: usize = 9;
 /// Bytes per light in the uploaded lights.
 pub(crate) const LIGHT_BYTES: u64 = 4 * LIGHT_FLOATS as u64;
 /// The pool's label of the uploaded lights (the frame's VPLs kept on the GPU are leased
@@ -193,6 +195,9 @@ pub struct GpuGridBuilder<'c> {
     /// The GPU's pass times of the last build (timestamps, where the adapter has them),
     /// apart from its timings, whose `level_count` and `gpu_build` hold them.
     pub passes: PassTimes,
+    /// Per build since the last [`GpuGridBuilder::take_lights`], its input lights on the
+    /// GPU (`None` where the CPU built it).
+    kept: Vec<Option<Lease<'c>>>,
 }
 
 /// States kept per context: one per frame building at once.
@@ -215,11 +220,20 @@ impl<'c> GpuGridBuilder<'c> {
             state: Some(state),
             fallback: None,
             passes: PassTimes::new(),
+            kept: Vec::new(),
         }
     }
 
     fn state(&mut self) -> &mut GridState {
         self.state.get_or_insert_with(GridState::default)
+    }
+
+    /// The input lights of each build since the last call, in build order, as the GPU holds
+    /// them ([`LIGHT_BYTES`] a light: position, intensity, normal; `None` where the CPU
+    /// built it): the lighting loop reads the representative VPLs there
+    /// ([`HierarchyBuilder::keeps_lights`]).
+    pub fn take_lights(&mut self) -> Vec<Option<Lease<'c>>> {
+        std::mem::take(&mut self.kept)
     }
 }
 
@@ -271,14 +285,16 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
                 request: &request,
             };
             match build_on(ctx, run, state, &mut t, &mut self.passes) {
-                Ok(()) => {
+                Ok(up) => {
                     state.on_cpu = false;
                     state.built = true;
+                    self.kept.push(Some(up));
                     return Ok(t);
                 }
                 Err(e) => self.fallback = Some(e.to_string()),
             }
         }
+        self.kept.push(None);
         let state = self.state();
         state.on_cpu = true;
         state.built = true;
@@ -299,6 +315,10 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
     fn representatives(&self) -> Option<&[[u32; SLOTS]]> {
         let s = self.state.as_ref().filter(|s| s.built)?;
         (!s.on_cpu && s.drawn).then_some(&s.reps[..])
+    }
+
+    fn keeps_lights(&self) -> bool {
+        matches!(self.kept.last(), Some(Some(_)))
     }
 
     fn grid(&self) -> Option<&LightingGrid> {
@@ -329,14 +349,14 @@ struct Run<'a, 'c> {
 
 /// Builds the hierarchy of `lights` on the GPU into `state` (its grid, and the S_1
 /// representatives where asked), with its timings in `t` and the GPU's pass times in
-/// `passes`.
+/// `passes`; returns the lights as the GPU held them for the build.
 fn build_on<'c>(
     ctx: &'c GpuContext,
     run: Run<'_, 'c>,
     state: &mut GridState,
     t: &mut BuildTimings,
     passes: &mut PassTimes,
-) -> Result<(), GpuError> {
+) -> Result<Lease<'c>, GpuError> {
     let Run {
         lights,
         resident,
@@ -573,7 +593,7 @@ fn build_on<'c>(
         state.drawn = draw::unpack_draw(&reads[1], &reads[2], kept, &mut state.reps);
     }
     t.push("unpack", start.elapsed().as_secs_f64() * 1e3);
-    Ok(())
+    Ok(up)
 }
 
 /// Records a dispatch of kernel `kernel` (of [`sources`]) under `name`, one invocation per
@@ -593,101 +613,4 @@ fn record(
     resources.extend(buffers);
     let bind = ctx.bind_group(&pipe, resources);
     batch.dispatch(name, &pipe, &bind, (p.n as usize).min(MAX_INVOCATIONS))
-}
-
-/// The lights as a storage buffer of [`LIGHT_FLOATS`] floats each (the normal zero where
-/// the lights have none), packed straight into the queue's staging memory in parallel.
-fn upload_lights<'c>(ctx: &'c GpuContext, lights: &InputLights) -> Result<Lease<'c>, GpuError> {
-    let n = lights.positions.len();
-    let lease = ctx.lease(
-        LIGHTS_IN,
-        4 * (LIGHT_FLOATS * n) as u64,
-        GpuContext::STORAGE,
-    )?;
-    let value = |i: usize| -> f32 {
-        let (light, c) = (i / LIGHT_FLOATS, i % LIGHT_FLOATS);
-        let v = match c / 3 {
-            0 => lights.positions[light],
-            1 => lights.intensity[light],
-            _ => lights.normals.map_or(Vec3::ZERO, |m| m[light]),
-        };
-        v[c % 3]
-    };
-    let floats = LIGHT_FLOATS * n;
-    ctx.write_parallel(lease.buffer(), lease.bytes(), |at, out| {
-        for (j, word) in out.chunks_exact_mut(4).enumerate() {
-            let i = at / 4 + j;
-            let v = if i < floats { value(i) } else { 0.0 };
-            word.copy_from_slice(&v.to_ne_bytes());
-        }
-    });
-    Ok(lease)
-}
-
-/// One grid light as read back.
-#[derive(Clone, Copy)]
-struct Record<'a>(&'a [u32]);
-
-impl Record<'_> {
-    fn float3(&self, at: usize) -> Vec3 {
-        Vec3::new(
-            f32::from_bits(self.0[at]),
-            f32::from_bits(self.0[at + 1]),
-            f32::from_bits(self.0[at + 2]),
-        )
-    }
-
-    fn intensity(&self) -> Vec3 {
-        self.float3(8)
-    }
-}
-
-/// The read-back grid lights (`counts[l - 1]` of level l, level by level) into `grid`,
-/// without the zero-intensity ones (the CPU build's compaction), normals zero where the
-/// lights had none.
-fn unpack(
-    geometry: GridGeometry,
-    counts: &[usize],
-    words: &[u32],
-    normals: bool,
-    grid: &mut LightingGrid,
-) {
-    grid.geometry = geometry;
-    grid.level_start.clear();
-    grid.level_start.push(0);
-    let mut kept: Vec<Record<'_>> = Vec::new();
-    let mut at = 0usize;
-    for &c in counts {
-        let end = (at + c).min(words.len() / RECORD_WORDS);
-        kept.par_extend(
-            words[RECORD_WORDS * at..RECORD_WORDS * end]
-                .par_chunks_exact(RECORD_WORDS)
-                .map(Record)
-                .filter(|r| r.intensity().max_element() > 0.0),
-        );
-        grid.level_start.push(kept.len() as u32);
-        at = end;
-    }
-    let fill = |out: &mut Vec<Vec3>, f: &(dyn Fn(&Record<'_>) -> Vec3 + Sync)| {
-        out.clear();
-        out.par_extend(kept.par_iter().map(f));
-    };
-    grid.vertex.clear();
-    grid.vertex
-        .par_extend(kept.par_iter().map(|r| UVec3::new(r.0[0], r.0[1], r.0[2])));
-    grid.mass.clear();
-    grid.mass
-        .par_extend(kept.par_iter().map(|r| f32::from_bits(r.0[3])));
-    fill(&mut grid.position, &|r| r.float3(4));
-    fill(&mut grid.intensity, &|r| r.intensity());
-    fill(&mut grid.normal, &|r| {
-        if normals { r.float3(12) } else { Vec3::ZERO }
-    });
-    fill(&mut grid.deviation, &|r| {
-        Vec3::new(
-            f32::from_bits(r.0[7]),
-            f32::from_bits(r.0[11]),
-            f32::from_bits(r.0[15]),
-        )
-    });
 }

@@ -8,21 +8,21 @@ use lgh_render::methods::MethodInputs;
 use lgh_render::methods::lgh::tables::LghTables;
 use lgh_render::shading::ratio::{RatioFilter, Shadowed};
 
-use super::{Loop, gpu_timings, record_loop};
-use crate::bins::GpuBins;
+use super::{Loop, OnGpu, gpu_timings, record_loop};
 use crate::context::{GpuContext, GpuError};
 use crate::ratio::{self, Frame};
 
-/// The loop and the ratio estimator of the frame with loop inputs `tables` and the ratio
+/// The loop and the ratio estimator of the frame with loop inputs `tables` (and what the GPU
+/// holds of it, `held`) and the ratio
 /// estimator's settings `filter` ([`ratio::supported`] must hold): the result, the lights
 /// per pixel and the timings ("lighting", "lighting_kernel", "interleave_blur",
 /// "shadow_filter" from the GPU's timestamps where it has them, "composite" on the CPU,
 /// "gpu_transfer" the rest).
-pub(super) fn shade(
-    ctx: &GpuContext,
+pub(super) fn shade<'c>(
+    ctx: &'c GpuContext,
     inputs: &MethodInputs,
     tables: &LghTables,
-    bins: Option<GpuBins<'_>>,
+    held: OnGpu<'c>,
     filter: &RatioFilter,
 ) -> Result<(Shadowed, Vec<u32>, Timings), GpuError> {
     let g = inputs.gbuffer;
@@ -34,7 +34,7 @@ pub(super) fn shade(
         upload_ms,
         counts_ms,
         ..
-    } = record_loop(ctx, inputs, tables, bins)?;
+    } = record_loop(ctx, inputs, tables, held)?;
     let frame = Frame {
         gbuffer: &gbuffer,
         g,

@@ -87,6 +87,8 @@ impl IndirectMethod for GpuLgh {
         let mut builder = crate::grid::GpuGridBuilder::new(ctx);
         let prepared = LghFrame::prepare_with(inputs, shadowed, memory, true, Some(&mut builder))
             .map_err(|e| RenderError::Backend(e.to_string()))?;
+        // The hierarchies' VPLs stay on the GPU for the shadow targets.
+        let vpls = builder.take_lights();
         drop(builder);
         let mut frame = match prepared {
             Prepared::Dark(output) => return Ok(output),
@@ -107,13 +109,14 @@ impl IndirectMethod for GpuLgh {
             RenderError::Backend("lgh on the GPU: the hierarchies' tables are missing".into())
         })?;
         let filter = frame.ratio_filter(inputs);
+        let held = OnGpu { bins, vpls };
         if crate::ratio::supported(&filter) {
             // The loop, the blur and the ratio estimator in one submission.
             let (shadowed, overdraw, timings) =
-                chain::shade(ctx, inputs, &tables, bins, &filter).map_err(fail)?;
+                chain::shade(ctx, inputs, &tables, held, &filter).map_err(fail)?;
             return Ok(frame.finish_shadowed(inputs, shadowed, overdraw, timings));
         }
-        let shaded = lighting_loop(ctx, inputs, &tables, bins).map_err(fail)?;
+        let shaded = lighting_loop(ctx, inputs, &tables, held).map_err(fail)?;
         Ok(frame.finish_with(inputs, shaded, memory, Some(gpu_atrous)))
     }
 }
@@ -168,6 +171,13 @@ pub fn source() -> String {
     ])
 }
 
+/// What the GPU holds of a frame before its loop: the tile lists, where it binned them,
+/// and each hierarchy's VPLs, where it built it ([`crate::grid::GpuGridBuilder::take_lights`]).
+pub(super) struct OnGpu<'c> {
+    pub bins: Option<GpuBins<'c>>,
+    pub vpls: Vec<Option<Lease<'c>>>,
+}
+
 /// The lighting loop recorded into a batch, with the buffers it reads and writes.
 pub(super) struct Loop<'c> {
     pub batch: Batch<'c>,
@@ -182,13 +192,15 @@ pub(super) struct Loop<'c> {
 }
 
 /// Packs and uploads the loop's inputs `tables` and records the loop (timed "lighting")
-/// after the passes of the GPU's tile `bins` (the CPU's bins in `tables` without them).
+/// after the passes of the GPU's tile bins (the CPU's bins in `tables` without them), with
+/// the hierarchies' VPLs where the GPU holds them (`held`).
 pub(super) fn record_loop<'c>(
     ctx: &'c GpuContext,
     inputs: &MethodInputs,
     tables: &LghTables,
-    bins: Option<GpuBins<'c>>,
+    held: OnGpu<'c>,
 ) -> Result<Loop<'c>, GpuError> {
+    let OnGpu { bins, vpls } = held;
     let start = Instant::now();
     let g = inputs.gbuffer;
     let n = g.len();
@@ -215,7 +227,7 @@ pub(super) fn record_loop<'c>(
         ctx.upload("lights", &packed.lights)?,
         lists,
         ctx.upload_parts("hierarchy tables", &packed.word_parts(tables))?,
-        ctx.upload("representatives", &packed.reps)?,
+        upload::representatives(ctx, &mut batch, tables, vpls)?,
     ];
     // Every pixel's three words are written by the kernel: no clearing.
     let out = ctx.output("A, S, U", 48 * n as u64)?;
@@ -281,7 +293,7 @@ fn lighting_loop<'c>(
     ctx: &'c GpuContext,
     inputs: &MethodInputs,
     tables: &LghTables,
-    bins: Option<GpuBins<'c>>,
+    held: OnGpu<'c>,
 ) -> Result<LoopResult, GpuError> {
     let n = inputs.gbuffer.len();
     let Loop {
@@ -291,7 +303,7 @@ fn lighting_loop<'c>(
         upload_ms,
         counts_ms,
         ..
-    } = record_loop(ctx, inputs, tables, bins)?;
+    } = record_loop(ctx, inputs, tables, held)?;
     batch.read(out.buffer(), out.bytes())?;
     let (reads, gpu) = batch.finish()?;
     let result: &[Vec4] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));

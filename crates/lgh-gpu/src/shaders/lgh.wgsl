@@ -69,10 +69,24 @@ struct Light {
 // Per hierarchy: vertex-row starts, descent starts, descent children as (child, bits of the
 // running sum), then per S_1 light its SLOTS representatives (indices into its VPLs).
 @group(0) @binding(6) var<storage, read> words: array<u32>;
-// Per hierarchy, its VPLs: position, normal, flux colour.
-@group(0) @binding(7) var<storage, read> reps: array<vec4<f32>>;
+// Per hierarchy, its VPLs as the hierarchy build read them (lgh_gpu::grid's lights,
+// LIGHT_FLOATS each): position, flux, normal.
+@group(0) @binding(7) var<storage, read> reps: array<f32>;
 // Per pixel: A (w: overdraw), S (w: rays traced), U.
 @group(0) @binding(8) var<storage, read_write> out: array<vec4<f32>>;
+
+const LIGHT_FLOATS: u32 = 9u;
+
+// Three floats of the VPLs from `at`.
+fn rep_vec(at: u32) -> vec3<f32> {
+    return vec3<f32>(reps[at], reps[at + 1u], reps[at + 2u]);
+}
+
+// An RGB value at unit luminance (zero without luminance), as the CPU's `chroma`.
+fn chroma(c: vec3<f32>) -> vec3<f32> {
+    let l = luminance(c);
+    return select(vec3<f32>(0.0), c / l, l > 0.0);
+}
 
 var<private> rng_state: u32;
 
@@ -252,8 +266,8 @@ fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f3
             let v = words[base + s];
             w[s] = 0.0;
             if (v != EMPTY_SLOT) {
-                let r = 3u * (h.vpl_base + v);
-                w[s] = rep_weight(x, n, reps[r].xyz, reps[r + 1u].xyz);
+                let r = LIGHT_FLOATS * (h.vpl_base + v);
+                w[s] = rep_weight(x, n, rep_vec(r), rep_vec(r + 6u));
                 total += w[s];
             }
         }
@@ -277,12 +291,12 @@ fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f3
                 }
             }
         }
-        let r = 3u * (h.vpl_base + words[base + pick]);
-        q = reps[r].xyz;
-        nq = reps[r + 1u].xyz;
-        let lum_c = luminance(c);
-        let chroma = select(vec3<f32>(0.0), c / lum_c, lum_c > 0.0);
-        colour = select(vec3<f32>(0.0), reps[r + 2u].xyz / chroma, chroma > vec3<f32>(0.0));
+        let r = LIGHT_FLOATS * (h.vpl_base + words[base + pick]);
+        q = rep_vec(r);
+        nq = rep_vec(r + 6u);
+        let colour_v = chroma(rep_vec(r + 3u));
+        let chroma_c = chroma(c);
+        colour = select(vec3<f32>(0.0), colour_v / chroma_c, chroma_c > vec3<f32>(0.0));
         mean_rho = total / f32(SLOTS);
     }
     if (!(mean_rho > 0.0)) {

@@ -248,7 +248,8 @@ impl ShadeLights {
     /// all-scatter), whose lights [`ShadeLights::add_hierarchy`] added from
     /// index `first` with levels `levels`: the representatives of its S_1 lights (drawn with
     /// `seed`, or `drawn` already where the builder drew them), the children of its coarser
-    /// lights and its centroids by vertex.
+    /// lights and its centroids by vertex. With `tables`, a copy of the VPLs for them unless
+    /// the builder `keeps` them on its device.
     pub(super) fn add_unbiased(
         &mut self,
         grid: &LightingGrid,
@@ -256,7 +257,7 @@ impl ShadeLights {
         levels: ShadedLevels,
         (seed, drawn): (u64, Option<&[[u32; SLOTS]]>),
         first: usize,
-        tables: bool,
+        (tables, keeps): (bool, bool),
     ) {
         // S_1 only: the draw below a coarser light is made afresh per sample. With tables the
         // frame is for another backend's loop, which reads the slots' VPL indices (the GPU
@@ -284,7 +285,7 @@ impl ShadeLights {
             descent: Descent::new(VertexLookup::new(grid, &rows)),
             first,
             grid_base: first + vpl_lights,
-            tables: tables.then(|| GridTables::new(grid, levels, slots.into_iter(), vpls)),
+            tables: tables.then(|| GridTables::new(grid, levels, slots.into_iter(), vpls, keeps)),
         });
     }
 

@@ -225,7 +225,8 @@ impl LghFrame {
                         alpha: settings.alpha,
                     };
                     let drawn = builder.representatives();
-                    lights.add_unbiased(grid, group, levels, (seed, drawn), first, tables);
+                    let keeps = tables && builder.keeps_lights();
+                    lights.add_unbiased(grid, group, levels, (seed, drawn), first, (tables, keeps));
                 } else {
                     lights.add_representatives(
                         grid,

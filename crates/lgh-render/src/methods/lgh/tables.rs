@@ -36,19 +36,24 @@ pub struct GridTables {
     /// Per S_1 light (by grid index), its [`SLOTS`] representatives: indices into `vpls`,
     /// [`lgh_core::lighting_grid::representative::NONE`] for an empty slot.
     pub rep_vpls: Vec<[u32; SLOTS]>,
-    /// The VPLs the hierarchy was built from.
+    /// The VPLs the hierarchy was built from; empty where its builder keeps them on its
+    /// device ([`lgh_core::lighting_grid::HierarchyBuilder::keeps_lights`]).
     pub vpls: Vec<RepSlot>,
+    /// How many VPLs the hierarchy was built from (`vpls.len()` unless they are kept).
+    pub vpl_count: usize,
 }
 
 impl GridTables {
     /// The tables of `grid`, built from `vpls` and shaded at `levels`, with its S_1
-    /// lights' representatives `rep_vpls`.
+    /// lights' representatives `rep_vpls`; without a copy of the VPLs where the builder
+    /// `keeps` them.
     #[must_use]
     pub(super) fn new(
         grid: &LightingGrid,
         levels: ShadedLevels,
         rep_vpls: impl Iterator<Item = [u32; SLOTS]>,
         vpls: &Vpls,
+        keeps: bool,
     ) -> Self {
         Self {
             geometry: grid.geometry,
@@ -56,7 +61,8 @@ impl GridTables {
             vertex_x: grid.vertex.par_iter().map(|v| v.x).collect(),
             rows: (1..=grid.l_max()).map(|l| row_starts(grid, l)).collect(),
             rep_vpls: rep_vpls.collect(),
-            vpls: (0..vpls.len())
+            vpl_count: vpls.len(),
+            vpls: (0..if keeps { 0 } else { vpls.len() })
                 .into_par_iter()
                 .map(|i| RepSlot {
                     position: vpls.positions[i],
