@@ -435,6 +435,13 @@ pub trait HierarchyBuilder: Send {
     fn keeps_lights(&self) -> bool {
         false
     }
+
+    /// Whether the last build drew its S_1 lights' representatives and keeps them on the
+    /// builder's device for the frame's later passes instead of handing them back
+    /// ([`HierarchyBuilder::representatives`] is then `None`). The CPU's: false.
+    fn keeps_representatives(&self) -> bool {
+        false
+    }
 }
 
 impl HierarchyBuilder for GridBuilder {

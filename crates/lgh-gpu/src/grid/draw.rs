@@ -171,6 +171,12 @@ pub(super) fn record_draw<'c>(
     Ok(Drawn { slots, flag })
 }
 
+/// Whether the draw whose read-back flag is `flag` drew (no run was too long to sort).
+pub(super) fn drew(flag: &[Words]) -> bool {
+    let flag: &[u32] = bytemuck::cast_slice(flag);
+    flag.first().copied().unwrap_or(1) == 0
+}
+
 /// The read-back slots of the `kept` S_1 lights into `out`; false (nothing drawn) if the
 /// flag says a run was too long to sort.
 pub(super) fn unpack_draw(
@@ -179,8 +185,7 @@ pub(super) fn unpack_draw(
     kept: usize,
     out: &mut Vec<[u32; SLOTS]>,
 ) -> bool {
-    let flag: &[u32] = bytemuck::cast_slice(flag);
-    if flag.first().copied().unwrap_or(1) != 0 {
+    if !drew(flag) {
         return false;
     }
     let words: &[u32] = bytemuck::cast_slice(slots);

@@ -195,9 +195,22 @@ pub struct GpuGridBuilder<'c> {
     /// The GPU's pass times of the last build (timestamps, where the adapter has them),
     /// apart from its timings, whose `level_count` and `gpu_build` hold them.
     pub passes: PassTimes,
-    /// Per build since the last [`GpuGridBuilder::take_lights`], its input lights on the
-    /// GPU (`None` where the CPU built it).
-    kept: Vec<Option<Lease<'c>>>,
+    /// Per build since the last [`GpuGridBuilder::take_held`], what the GPU holds of it
+    /// (`None` where the CPU built it).
+    kept: Vec<Option<Held<'c>>>,
+    /// Whether the builds keep their representatives on the GPU instead of reading them
+    /// back ([`GpuGridBuilder::keep_representatives`]).
+    keep_slots: bool,
+}
+
+/// What the GPU holds of one build for the frame's later passes.
+pub struct Held<'c> {
+    /// The build's input lights ([`LIGHT_BYTES`] a light: position, intensity, normal).
+    pub lights: Lease<'c>,
+    /// The S_1 lights' [`SLOTS`] representatives each (indices into the lights), in grid
+    /// order, where the build drew them and keeps them
+    /// ([`GpuGridBuilder::keep_representatives`]).
+    pub slots: Option<Lease<'c>>,
 }
 
 /// States kept per context: one per frame building at once.
@@ -221,6 +234,7 @@ impl<'c> GpuGridBuilder<'c> {
             fallback: None,
             passes: PassTimes::new(),
             kept: Vec::new(),
+            keep_slots: false,
         }
     }
 
@@ -228,12 +242,19 @@ impl<'c> GpuGridBuilder<'c> {
         self.state.get_or_insert_with(GridState::default)
     }
 
-    /// The input lights of each build since the last call, in build order, as the GPU holds
-    /// them ([`LIGHT_BYTES`] a light: position, intensity, normal; `None` where the CPU
-    /// built it): the lighting loop reads the representative VPLs there
-    /// ([`HierarchyBuilder::keeps_lights`]).
-    pub fn take_lights(&mut self) -> Vec<Option<Lease<'c>>> {
+    /// What the GPU holds of each build since the last call, in build order (`None` where
+    /// the CPU built it): its input lights, where the lighting loop reads the representative
+    /// VPLs ([`HierarchyBuilder::keeps_lights`]), and its representatives where it keeps
+    /// them ([`HierarchyBuilder::keeps_representatives`]).
+    pub fn take_held(&mut self) -> Vec<Option<Held<'c>>> {
         std::mem::take(&mut self.kept)
+    }
+
+    /// Makes the next builds that draw representatives keep them on the GPU for the
+    /// lighting loop ([`Held::slots`]) instead of reading them back, where `keep`: a frame
+    /// whose loop runs on the GPU needs no copy of them on the CPU.
+    pub fn keep_representatives(&mut self, keep: bool) {
+        self.keep_slots = keep;
     }
 }
 
@@ -278,6 +299,7 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
                 levels,
                 bounds: lighting_grid::shifted_bounds(lo, hi, state.cpu.shift()),
                 seed: state.seed,
+                keep_slots: self.keep_slots,
             };
             let run = Run {
                 lights,
@@ -285,10 +307,10 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
                 request: &request,
             };
             match build_on(ctx, run, state, &mut t, &mut self.passes) {
-                Ok(up) => {
+                Ok(held) => {
                     state.on_cpu = false;
                     state.built = true;
-                    self.kept.push(Some(up));
+                    self.kept.push(Some(held));
                     return Ok(t);
                 }
                 Err(e) => self.fallback = Some(e.to_string()),
@@ -321,6 +343,10 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
         matches!(self.kept.last(), Some(Some(_)))
     }
 
+    fn keeps_representatives(&self) -> bool {
+        matches!(self.kept.last(), Some(Some(h)) if h.slots.is_some())
+    }
+
     fn grid(&self) -> Option<&LightingGrid> {
         let s = self.state.as_ref().filter(|s| s.built)?;
         if s.on_cpu {
@@ -338,6 +364,8 @@ struct Request {
     bounds: (Vec3, Vec3),
     /// The seed of the representatives' draw, if they are to be drawn.
     seed: Option<u64>,
+    /// Whether drawn representatives stay on the GPU (not read back).
+    keep_slots: bool,
 }
 
 /// The lights of one build: on the CPU, and the same on the GPU if they are there already.
@@ -349,14 +377,15 @@ struct Run<'a, 'c> {
 
 /// Builds the hierarchy of `lights` on the GPU into `state` (its grid, and the S_1
 /// representatives where asked), with its timings in `t` and the GPU's pass times in
-/// `passes`; returns the lights as the GPU held them for the build.
+/// `passes`; returns what the GPU holds of it: the lights, and the representatives where
+/// they are kept there.
 fn build_on<'c>(
     ctx: &'c GpuContext,
     run: Run<'_, 'c>,
     state: &mut GridState,
     t: &mut BuildTimings,
     passes: &mut PassTimes,
-) -> Result<Lease<'c>, GpuError> {
+) -> Result<Held<'c>, GpuError> {
     let Run {
         lights,
         resident,
@@ -366,6 +395,7 @@ fn build_on<'c>(
         levels,
         bounds: (lo, hi),
         seed,
+        keep_slots,
     } = *request;
     state.drawn = false;
     let n = lights.positions.len();
@@ -564,7 +594,9 @@ fn build_on<'c>(
     };
     batch.read(records.buffer(), records.bytes())?;
     if let Some(d) = &drawn {
-        batch.read(d.slots.buffer(), d.slots.bytes())?;
+        if !keep_slots {
+            batch.read(d.slots.buffer(), d.slots.bytes())?;
+        }
         batch.read(d.flag.buffer(), d.flag.bytes())?;
     }
     let (reads, gpu) = batch.finish()?;
@@ -588,12 +620,19 @@ fn build_on<'c>(
         lights.normals.is_some(),
         grid,
     );
-    if drawn.is_some() && reads.len() == 3 {
-        let kept = grid.level_range(1).len();
-        state.drawn = draw::unpack_draw(&reads[1], &reads[2], kept, &mut state.reps);
+    let mut slots = None;
+    match drawn {
+        Some(d) if keep_slots && reads.len() == 2 => {
+            slots = draw::drew(&reads[1]).then_some(d.slots);
+        }
+        Some(_) if reads.len() == 3 => {
+            let kept = grid.level_range(1).len();
+            state.drawn = draw::unpack_draw(&reads[1], &reads[2], kept, &mut state.reps);
+        }
+        _ => {}
     }
     t.push("unpack", start.elapsed().as_secs_f64() * 1e3);
-    Ok(up)
+    Ok(Held { lights: up, slots })
 }
 
 /// Records a dispatch of kernel `kernel` (of [`sources`]) under `name`, one invocation per

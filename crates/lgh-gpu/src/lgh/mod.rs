@@ -4,8 +4,10 @@
 //! light, a representative VPL by contribution) and one shadow ray each through the uploaded
 //! BVH, giving S and U.
 //!
-//! The hierarchies are built on the GPU ([`crate::grid`]) and read back; the shaded lights
-//! and the unbiased estimate's tables are made on the CPU, as the CPU method makes them
+//! The hierarchies are built on the GPU ([`crate::grid`]) and read back, but for their S_1
+//! lights' representatives and the VPLs these index, which stay there for the loop
+//! (`held.rs`); the shaded lights and the unbiased estimate's tables are made on the CPU,
+//! as the CPU method makes them
 //! ([`LghFrame::prepare_with`]); the lights are binned into tiles on the GPU
 //! ([`crate::bins`], the CPU's lists) in the loop's submission; and the loop's other inputs
 //! go up as flat tables ([`LghFrame::tables`]); the steps after it (the interleaving blur,
@@ -41,6 +43,7 @@ use crate::gbuffer::GpuGBuffer;
 use crate::pool::Lease;
 
 mod chain;
+mod held;
 mod upload;
 
 use upload::{Params, Tables};
@@ -84,11 +87,12 @@ impl IndirectMethod for GpuLgh {
         let fail = |e: GpuError| RenderError::Backend(e.to_string());
         let ctx = GpuContext::shared().map_err(fail)?;
         // The hierarchies built on the GPU (the gather construction on the CPU).
+        // Their representatives and the VPLs these index stay on the GPU for the loop.
         let mut builder = crate::grid::GpuGridBuilder::new(ctx);
+        builder.keep_representatives(true);
         let prepared = LghFrame::prepare_with(inputs, shadowed, memory, true, Some(&mut builder))
             .map_err(|e| RenderError::Backend(e.to_string()))?;
-        // The hierarchies' VPLs stay on the GPU for the shadow targets.
-        let vpls = builder.take_lights();
+        let hierarchies = builder.take_held();
         drop(builder);
         let mut frame = match prepared {
             Prepared::Dark(output) => return Ok(output),
@@ -109,7 +113,7 @@ impl IndirectMethod for GpuLgh {
             RenderError::Backend("lgh on the GPU: the hierarchies' tables are missing".into())
         })?;
         let filter = frame.ratio_filter(inputs);
-        let held = OnGpu { bins, vpls };
+        let held = OnGpu { bins, hierarchies };
         if crate::ratio::supported(&filter) {
             // The loop, the blur and the ratio estimator in one submission.
             let (shadowed, overdraw, timings) =
@@ -172,10 +176,11 @@ pub fn source() -> String {
 }
 
 /// What the GPU holds of a frame before its loop: the tile lists, where it binned them,
-/// and each hierarchy's VPLs, where it built it ([`crate::grid::GpuGridBuilder::take_lights`]).
+/// and of each hierarchy, where it built it, the VPLs and representatives
+/// ([`crate::grid::GpuGridBuilder::take_held`]).
 pub(super) struct OnGpu<'c> {
     pub bins: Option<GpuBins<'c>>,
-    pub vpls: Vec<Option<Lease<'c>>>,
+    pub hierarchies: Vec<Option<crate::grid::Held<'c>>>,
 }
 
 /// The lighting loop recorded into a batch, with the buffers it reads and writes.
@@ -200,7 +205,7 @@ pub(super) fn record_loop<'c>(
     tables: &LghTables,
     held: OnGpu<'c>,
 ) -> Result<Loop<'c>, GpuError> {
-    let OnGpu { bins, vpls } = held;
+    let OnGpu { bins, hierarchies } = held;
     let start = Instant::now();
     let g = inputs.gbuffer;
     let n = g.len();
@@ -223,11 +228,13 @@ pub(super) fn record_loop<'c>(
     let params = Params::new(inputs, tables, &packed, layout)?;
     let params = ctx.uniform("lgh params", &params);
     let gbuffer = ctx.gbuffer(g)?;
+    let (slots, reps) = held::join(ctx, &mut batch, tables, hierarchies)?;
     let buffers = vec![
         ctx.upload("lights", &packed.lights)?,
         lists,
         ctx.upload_parts("hierarchy tables", &packed.word_parts(tables))?,
-        upload::representatives(ctx, &mut batch, tables, vpls)?,
+        reps,
+        slots,
     ];
     // Every pixel's three words are written by the kernel: no clearing.
     let out = ctx.output("A, S, U", 48 * n as u64)?;

@@ -10,11 +10,9 @@ use lgh_core::lighting_grid::representative::SLOTS;
 
 use lgh_render::shading::tiles::FlatBins;
 
-use crate::batch::Batch;
 use crate::bins::ListLayout;
-use crate::context::{GpuContext, GpuError};
-use crate::grid::{LIGHT_BYTES, LIGHT_FLOATS};
-use crate::pool::Lease;
+use crate::context::GpuError;
+use crate::grid::LIGHT_FLOATS;
 
 /// Hierarchies the uniform holds (the six normal bins, and room).
 pub(super) const MAX_HIERARCHIES: usize = 8;
@@ -68,7 +66,7 @@ pub(super) struct Tables {
     order: Vec<u32>,
     /// Per hierarchy, its descent children as (child, bits of the running sum).
     children: Vec<Vec<u32>>,
-    /// Each hierarchy's place in the words and the representatives' VPLs.
+    /// Each hierarchy's place in the words, the representatives and their VPLs.
     hier: Vec<Hier>,
 }
 
@@ -99,8 +97,8 @@ impl Tables {
         let order = t.bins.as_ref().map_or_else(Vec::new, |b| {
             pixel_order(&b.list, b.offsets.len().saturating_sub(1))
         });
-        let (mut words, mut vpls, mut hier, mut children) =
-            (0usize, 0usize, Vec::new(), Vec::new());
+        let (mut words, mut vpls, mut slots, mut hier, mut children) =
+            (0usize, 0usize, 0usize, Vec::new(), Vec::new());
         for h in &t.hierarchies {
             let grid = h.grid;
             if let Some(grid_lights) = lights.get_mut(h.grid_base as usize..) {
@@ -121,8 +119,8 @@ impl Tables {
                 .collect();
             words += pairs.len();
             children.push(pairs);
-            let reps_base = words as u32;
-            words += SLOTS * grid.rep_vpls.len();
+            let reps_base = slots as u32;
+            slots += SLOTS * grid.s1_count;
             let vpl_base = vpls as u32;
             vpls += grid.vpl_count;
             hier.push(Hier {
@@ -141,7 +139,8 @@ impl Tables {
                 _pad: [0; 2],
             });
         }
-        if words > u32::MAX as usize / 2 || vpls > u32::MAX as usize / 2 / LIGHT_FLOATS {
+        let limit = u32::MAX as usize / 2;
+        if words > limit || slots > limit || vpls > limit / LIGHT_FLOATS {
             return Err(GpuError::TooLarge("hierarchy tables".into()));
         }
         Ok(Self {
@@ -177,15 +176,15 @@ impl Tables {
     }
 
     /// The hierarchy buffer (words): per hierarchy its vertex-row starts of levels
-    /// 1..=l_max, descent starts, descent children as (child, bits of the running sum),
-    /// and per S_1 light its [`SLOTS`] representatives as indices into the hierarchy's VPLs.
+    /// 1..=l_max, descent starts, and descent children as (child, bits of the running sum).
+    /// (The S_1 lights' representatives and the VPLs they index are joined apart,
+    /// [`super::held`].)
     pub(super) fn word_parts<'s>(&'s self, t: &'s LghTables) -> Vec<&'s [u8]> {
         let mut parts: Vec<&[u8]> = Vec::new();
         for (h, children) in t.hierarchies.iter().zip(&self.children) {
             parts.extend(h.grid.rows.iter().map(|r| bytemuck::cast_slice(r)));
             parts.push(bytemuck::cast_slice(h.descent_starts));
             parts.push(bytemuck::cast_slice(children));
-            parts.push(bytemuck::cast_slice(&h.grid.rep_vpls));
         }
         parts
     }
@@ -241,168 +240,4 @@ fn pixel_order(list: &[u32], lists: usize) -> Vec<u32> {
         *slot += 1;
     }
     order
-}
-
-/// The VPLs of every hierarchy in one buffer, in the hierarchy build's layout
-/// ([`LIGHT_BYTES`] a VPL: position, flux, normal), which the unbiased estimate's targets
-/// read by index: each hierarchy's VPLs as its build held them on the GPU (`kept`, in
-/// hierarchy order; no upload), or packed from the tables where the CPU built it. The
-/// copies are recorded in `batch`, which keeps what they read.
-///
-/// # Errors
-/// `kept` does not match the hierarchies, or a buffer cannot be had.
-pub(super) fn representatives<'c>(
-    ctx: &'c GpuContext,
-    batch: &mut Batch<'c>,
-    t: &LghTables,
-    kept: Vec<Option<Lease<'c>>>,
-) -> Result<Lease<'c>, GpuError> {
-    if t.hierarchies.is_empty() {
-        // Nothing reads them (no shadow samples); a binding needs a buffer.
-        return ctx.output("representatives", LIGHT_BYTES);
-    }
-    if kept.len() != t.hierarchies.len() {
-        return Err(GpuError::Failed(format!(
-            "lgh on the GPU: {} hierarchies but {} builds",
-            t.hierarchies.len(),
-            kept.len()
-        )));
-    }
-    let mut parts: Vec<Lease<'c>> = Vec::with_capacity(kept.len());
-    for (h, lease) in t.hierarchies.iter().zip(kept) {
-        let grid = h.grid;
-        let part = match lease {
-            Some(lease) if lease.bytes() >= LIGHT_BYTES * grid.vpl_count as u64 => lease,
-            _ if grid.vpls.len() == grid.vpl_count => {
-                let floats: Vec<f32> = grid
-                    .vpls
-                    .par_iter()
-                    .flat_map_iter(|v| {
-                        [v.position, v.colour, v.normal]
-                            .into_iter()
-                            .flat_map(|c| c.to_array())
-                    })
-                    .collect();
-                ctx.upload("representatives", &floats)?
-            }
-            _ => {
-                return Err(GpuError::Failed(
-                    "lgh on the GPU: a hierarchy's VPLs are neither kept nor copied".into(),
-                ));
-            }
-        };
-        parts.push(part);
-    }
-    if parts.len() == 1 {
-        return parts
-            .pop()
-            .ok_or_else(|| GpuError::Failed("no hierarchy".into()));
-    }
-    let total: usize = t.hierarchies.iter().map(|h| h.grid.vpl_count).sum();
-    let all = ctx.output("representatives", LIGHT_BYTES * total.max(1) as u64)?;
-    let mut at = 0u64;
-    for (h, part) in t.hierarchies.iter().zip(parts) {
-        let bytes = LIGHT_BYTES * h.grid.vpl_count as u64;
-        batch.copy(&part, 0, &all, at, bytes);
-        at += bytes;
-        batch.keep(part);
-    }
-    Ok(all)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::grid::GpuGridBuilder;
-    use glam::Vec3;
-    use lgh_core::color::luminance;
-    use lgh_render::memory::FrameMemory;
-    use lgh_render::methods::lgh::{LghFrame, Prepared};
-    use lgh_render::passes::gbuffer::GBuffer;
-    use lgh_render::passes::vpl_gen::generate_vpls;
-    use lgh_render::{RenderSettings, Silent, World};
-
-    /// The representatives' VPLs of the default scene's frame (one hierarchy, or six by
-    /// normal), as the loop reads them, read back: from the GPU builder's kept lights (with
-    /// `gpu`) or packed from the tables of hierarchies the CPU built.
-    fn read_representatives(normal_bins: bool, gpu: bool) -> Vec<f32> {
-        let mut scene = lgh_scene::cornell::cornell_box();
-        scene
-            .finish(std::path::Path::new("<built-in cornell>"))
-            .expect("scene");
-        let world = World::new(scene);
-        let mut s = RenderSettings {
-            width: 32,
-            height: 18,
-            vpls: 3000,
-            ..RenderSettings::default()
-        };
-        s.lgh.normal_bins = normal_bins;
-        let camera = world.scene.camera().frame(s.width, s.height);
-        let g = GBuffer::render(&world, &camera, s.width, s.height);
-        let vpls = generate_vpls(&world, s.vpls, s.bounces, s.seed, s.path_numbers);
-        let inputs = MethodInputs {
-            world: &world,
-            gbuffer: &g,
-            camera: &camera,
-            vpls: &vpls.vpls,
-            settings: &s,
-            progress: &Silent,
-        };
-        let ctx = GpuContext::shared().expect("an adapter");
-        let mut builder = GpuGridBuilder::new(ctx);
-        let mut memory = FrameMemory::default();
-        let b: Option<&mut dyn lgh_core::lighting_grid::HierarchyBuilder> =
-            gpu.then_some(&mut builder as _);
-        let Ok(Prepared::Frame(frame)) =
-            LghFrame::prepare_with(&inputs, true, &mut memory, true, b)
-        else {
-            panic!("a frame with VPLs");
-        };
-        let kept = builder.take_lights();
-        let tables = frame.tables(s.width, s.height).expect("tables");
-        assert_eq!(tables.hierarchies.len(), if normal_bins { 6 } else { 1 });
-        assert_eq!(kept.len(), if gpu { tables.hierarchies.len() } else { 0 });
-        let kept = if gpu {
-            kept
-        } else {
-            tables.hierarchies.iter().map(|_| None).collect()
-        };
-        let mut batch = Batch::new(ctx);
-        let reps = representatives(ctx, &mut batch, &tables, kept).expect("representatives");
-        batch.read(reps.buffer(), reps.bytes()).expect("read");
-        let (reads, _) = batch.finish().expect("gpu");
-        let total: usize = tables.hierarchies.iter().map(|h| h.grid.vpl_count).sum();
-        assert_eq!(total, vpls.vpls.len());
-        bytemuck::cast_slice::<_, f32>(&reads[0])[..LIGHT_FLOATS * total].to_vec()
-    }
-
-    /// The VPLs a GPU-built frame's loop reads where its builds held them (no upload) are
-    /// those the CPU packs from its tables: the same positions and normals bit for bit, in
-    /// the same order, and the same flux colour (the loop reads the flux at unit luminance),
-    /// with one hierarchy (bound as the build held it) and with six (copied into one buffer).
-    #[test]
-    #[cfg_attr(
-        not(gpu_adapter),
-        ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
-    )]
-    fn the_vpls_kept_from_the_builds_are_those_the_cpu_packs() {
-        let vec = |r: &[f32], i: usize, at: usize| {
-            Vec3::from_slice(&r[LIGHT_FLOATS * i + at..LIGHT_FLOATS * i + at + 3])
-        };
-        let chroma = |c: Vec3| c / luminance(c);
-        for normal_bins in [false, true] {
-            let (gpu, cpu) = (
-                read_representatives(normal_bins, true),
-                read_representatives(normal_bins, false),
-            );
-            assert_eq!(gpu.len(), cpu.len());
-            for i in 0..gpu.len() / LIGHT_FLOATS {
-                assert_eq!(vec(&gpu, i, 0), vec(&cpu, i, 0), "position {i}");
-                assert_eq!(vec(&gpu, i, 6), vec(&cpu, i, 6), "normal {i}");
-                let (a, b) = (chroma(vec(&gpu, i, 3)), chroma(vec(&cpu, i, 3)));
-                assert!((a - b).abs().max_element() < 1e-5, "colour {i}: {a} {b}");
-            }
-        }
-    }
 }

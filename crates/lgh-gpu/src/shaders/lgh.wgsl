@@ -67,13 +67,15 @@ struct Light {
 // pixel's list (from params.pixel_lists).
 @group(0) @binding(5) var<storage, read> lists: array<u32>;
 // Per hierarchy: vertex-row starts, descent starts, descent children as (child, bits of the
-// running sum), then per S_1 light its SLOTS representatives (indices into its VPLs).
+// running sum).
 @group(0) @binding(6) var<storage, read> words: array<u32>;
 // Per hierarchy, its VPLs as the hierarchy build read them (lgh_gpu::grid's lights,
 // LIGHT_FLOATS each): position, flux, normal.
 @group(0) @binding(7) var<storage, read> reps: array<f32>;
+// Per hierarchy, per S_1 light its SLOTS representatives (indices into its VPLs).
+@group(0) @binding(8) var<storage, read> slots: array<u32>;
 // Per pixel: A (w: overdraw), S (w: rays traced), U.
-@group(0) @binding(8) var<storage, read_write> out: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> out: array<vec4<f32>>;
 
 const LIGHT_FLOATS: u32 = 9u;
 
@@ -263,7 +265,7 @@ fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f3
         var w: array<f32, 16>;
         var total = 0.0;
         for (var s = 0u; s < SLOTS; s++) {
-            let v = words[base + s];
+            let v = slots[base + s];
             w[s] = 0.0;
             if (v != EMPTY_SLOT) {
                 let r = LIGHT_FLOATS * (h.vpl_base + v);
@@ -291,7 +293,7 @@ fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f3
                 }
             }
         }
-        let r = LIGHT_FLOATS * (h.vpl_base + words[base + pick]);
+        let r = LIGHT_FLOATS * (h.vpl_base + slots[base + pick]);
         q = rep_vec(r);
         nq = rep_vec(r + 6u);
         let colour_v = chroma(rep_vec(r + 3u));

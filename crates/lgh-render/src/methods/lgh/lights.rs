@@ -249,7 +249,8 @@ impl ShadeLights {
     /// index `first` with levels `levels`: the representatives of its S_1 lights (drawn with
     /// `seed`, or `drawn` already where the builder drew them), the children of its coarser
     /// lights and its centroids by vertex. With `tables`, a copy of the VPLs for them unless
-    /// the builder `keeps` them on its device.
+    /// the builder keeps them on its device (`keeps.0`), and the representatives unless it
+    /// drew them and keeps them there (`keeps.1`).
     pub(super) fn add_unbiased(
         &mut self,
         grid: &LightingGrid,
@@ -257,7 +258,7 @@ impl ShadeLights {
         levels: ShadedLevels,
         (seed, drawn): (u64, Option<&[[u32; SLOTS]]>),
         first: usize,
-        (tables, keeps): (bool, bool),
+        (tables, keeps): (bool, (bool, bool)),
     ) {
         // S_1 only: the draw below a coarser light is made afresh per sample. With tables the
         // frame is for another backend's loop, which reads the slots' VPL indices (the GPU
@@ -266,6 +267,7 @@ impl ShadeLights {
         let drawn = drawn.filter(|d| d.len() == grid.level_range(1).len());
         let input = vpls.as_input();
         let (reps, slots): (Vec<RepSet>, Vec<[u32; SLOTS]>) = match (tables, drawn) {
+            (true, _) if keeps.1 => (Vec::new(), Vec::new()),
             (true, Some(d)) => (Vec::new(), d.to_vec()),
             (true, None) => (Vec::new(), s1_representatives(grid, &input, seed, |s| *s)),
             (false, Some(d)) => (
@@ -285,7 +287,7 @@ impl ShadeLights {
             descent: Descent::new(VertexLookup::new(grid, &rows)),
             first,
             grid_base: first + vpl_lights,
-            tables: tables.then(|| GridTables::new(grid, levels, slots.into_iter(), vpls, keeps)),
+            tables: tables.then(|| GridTables::new(grid, levels, slots.into_iter(), vpls, keeps.0)),
         });
     }
 

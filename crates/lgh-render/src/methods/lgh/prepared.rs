@@ -225,7 +225,10 @@ impl LghFrame {
                         alpha: settings.alpha,
                     };
                     let drawn = builder.representatives();
-                    let keeps = tables && builder.keeps_lights();
+                    let keeps = (
+                        tables && builder.keeps_lights(),
+                        tables && builder.keeps_representatives(),
+                    );
                     lights.add_unbiased(grid, group, levels, (seed, drawn), first, (tables, keeps));
                 } else {
                     lights.add_representatives(

@@ -34,8 +34,12 @@ pub struct GridTables {
     /// Per level l = 1..=l_max (index l - 1), the row starts.
     pub rows: Vec<Vec<u32>>,
     /// Per S_1 light (by grid index), its [`SLOTS`] representatives: indices into `vpls`,
-    /// [`lgh_core::lighting_grid::representative::NONE`] for an empty slot.
+    /// [`lgh_core::lighting_grid::representative::NONE`] for an empty slot; empty where the
+    /// builder keeps them on its device
+    /// ([`lgh_core::lighting_grid::HierarchyBuilder::keeps_representatives`]).
     pub rep_vpls: Vec<[u32; SLOTS]>,
+    /// The number of S_1 lights (`rep_vpls.len()` unless the builder keeps them).
+    pub s1_count: usize,
     /// The VPLs the hierarchy was built from; empty where its builder keeps them on its
     /// device ([`lgh_core::lighting_grid::HierarchyBuilder::keeps_lights`]).
     pub vpls: Vec<RepSlot>,
@@ -61,6 +65,7 @@ impl GridTables {
             vertex_x: grid.vertex.par_iter().map(|v| v.x).collect(),
             rows: (1..=grid.l_max()).map(|l| row_starts(grid, l)).collect(),
             rep_vpls: rep_vpls.collect(),
+            s1_count: grid.level_range(1).len(),
             vpl_count: vpls.len(),
             vpls: (0..if keeps { 0 } else { vpls.len() })
                 .into_par_iter()
