@@ -120,7 +120,7 @@ pub fn sources() -> [String; 5] {
 
 /// The spheres of `s` as the kernels read them: centre and radius (finite), and per light
 /// its sub-image with the flags for radii that are not.
-fn pack_spheres(s: &LightSpheres) -> (Vec<Vec4>, Vec<u32>) {
+pub(crate) fn pack_spheres(s: &LightSpheres) -> (Vec<Vec4>, Vec<u32>) {
     let spheres = s
         .centres
         .iter()
@@ -164,7 +164,8 @@ fn groups(items: usize) -> u32 {
 
 /// Bins the lights `spheres` over the G-buffer `g` (on the GPU as `gbuffer`) seen through
 /// `camera`: submits and waits for the counts, then records the lists' passes into the
-/// returned batch.
+/// returned batch. The spheres as the kernels read them (centre and finite radius; sub-image
+/// with flags) are packed from `spheres` and uploaded, or are `on_gpu` already.
 ///
 /// # Errors
 /// More lights, lists or list entries than the buffers or a u32 index hold (the caller
@@ -175,6 +176,7 @@ pub fn record<'c>(
     camera: &CameraFrame,
     gbuffer: &GpuGBuffer,
     spheres: &LightSpheres,
+    on_gpu: Option<(Lease<'c>, Lease<'c>)>,
 ) -> Result<GpuBins<'c>, GpuError> {
     let start = Instant::now();
     let n = spheres.n.max(1);
@@ -199,9 +201,16 @@ pub fn record<'c>(
     // The first submission: bounds, counts, starts.
     let uniform = ctx.uniform("bin params", &params);
     let cam = ctx.uniform("bin camera", &GpuCamera::new(camera, g.width, g.height));
-    let (packed, flags) = pack_spheres(spheres);
-    let sphere_buf = ctx.upload("bin spheres", &packed)?;
-    let flag_buf = ctx.upload("bin flags", &flags)?;
+    let (sphere_buf, flag_buf) = match on_gpu {
+        Some(made) => made,
+        None => {
+            let (packed, flags) = pack_spheres(spheres);
+            (
+                ctx.upload("bin spheres", &packed)?,
+                ctx.upload("bin flags", &flags)?,
+            )
+        }
+    };
     let bounds = ctx.output("tile bounds", BOUNDS_BYTES * u64::from(lists))?;
     let counts = ctx.output("bin counts", 4 * u64::from(lists))?;
     let starts = ctx.output("bin starts", 4 * u64::from(lists))?;

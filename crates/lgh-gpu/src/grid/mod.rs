@@ -55,7 +55,7 @@ pub(crate) const LIGHT_BYTES: u64 = 4 * LIGHT_FLOATS as u64;
 pub(crate) const LIGHTS_IN: &str = "grid lights in";
 /// Words per grid light read back (vertex and mass, position, intensity, normal; the
 /// deviation in the fourth word of the last three).
-const RECORD_WORDS: usize = 16;
+pub(crate) const RECORD_WORDS: usize = 16;
 /// Words of the fixed-point sums per S_1 vertex (13 sums of three words).
 const ACC_WORDS: u64 = 39;
 /// Floats per vertex of the sums of every level (13 used).
@@ -211,6 +211,14 @@ pub struct Held<'c> {
     /// order, where the build drew them and keeps them
     /// ([`GpuGridBuilder::keep_representatives`]).
     pub slots: Option<Lease<'c>>,
+    /// The grid lights as the build emitted them ([`RECORD_WORDS`] words each: vertex and
+    /// mass, position, intensity, normal, the deviation in the fourth word of the last
+    /// three), level by level from S_1, the zero-intensity ones still among them (the CPU
+    /// drops them as it unpacks), where the build keeps them
+    /// ([`GpuGridBuilder::keep_representatives`]).
+    pub records: Option<Lease<'c>>,
+    /// The records of each level l = 1..=l_max (index l - 1), zero-intensity ones included.
+    pub level_records: Vec<u32>,
 }
 
 /// States kept per context: one per frame building at once.
@@ -250,9 +258,10 @@ impl<'c> GpuGridBuilder<'c> {
         std::mem::take(&mut self.kept)
     }
 
-    /// Makes the next builds that draw representatives keep them on the GPU for the
-    /// lighting loop ([`Held::slots`]) instead of reading them back, where `keep`: a frame
-    /// whose loop runs on the GPU needs no copy of them on the CPU.
+    /// Makes the next builds keep on the GPU, for a lighting loop that runs there, their
+    /// grid lights as emitted ([`Held::records`]) and, where they draw them, their
+    /// representatives instead of reading these back ([`Held::slots`]), where `keep`: such a
+    /// frame needs no copy of the representatives on the CPU.
     pub fn keep_representatives(&mut self, keep: bool) {
         self.keep_slots = keep;
     }
@@ -620,6 +629,11 @@ fn build_on<'c>(
         lights.normals.is_some(),
         grid,
     );
+    let level_records = if keep_slots {
+        counts.iter().map(|&c| c as u32).collect()
+    } else {
+        Vec::new()
+    };
     let mut slots = None;
     match drawn {
         Some(d) if keep_slots && reads.len() == 2 => {
@@ -632,7 +646,12 @@ fn build_on<'c>(
         _ => {}
     }
     t.push("unpack", start.elapsed().as_secs_f64() * 1e3);
-    Ok(Held { lights: up, slots })
+    Ok(Held {
+        lights: up,
+        slots,
+        records: keep_slots.then_some(records),
+        level_records,
+    })
 }
 
 /// Records a dispatch of kernel `kernel` (of [`sources`]) under `name`, one invocation per

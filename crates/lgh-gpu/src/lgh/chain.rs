@@ -32,7 +32,7 @@ pub(super) fn shade<'c>(
         gbuffer,
         start,
         upload_ms,
-        counts_ms,
+        before,
         ..
     } = record_loop(ctx, inputs, tables, held)?;
     let frame = Frame {
@@ -46,7 +46,7 @@ pub(super) fn shade<'c>(
     let (reads, gpu) = batch.finish()?;
     let planes: &[[Vec4; 3]] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
     let (shadowed, overdraw, composite_ms) = ratio::unpack(planes, tables.k, g);
-    let mut t = gpu_timings(&gpu, start, upload_ms, composite_ms, counts_ms);
+    let mut t = gpu_timings(&gpu, start, upload_ms, composite_ms, &before);
     t.push("composite", composite_ms);
     Ok((shadowed, overdraw, t))
 }

@@ -58,7 +58,7 @@ pub(super) fn join<'c>(
     for (h, held) in t.hierarchies.iter().zip(held) {
         let g: &GridTables = h.grid;
         let (on_gpu_vpls, on_gpu_slots) = match held {
-            Some(Held { lights, slots }) => (Some(lights), slots),
+            Some(Held { lights, slots, .. }) => (Some(lights), slots),
             None => (None, None),
         };
         let slot_bytes = 4 * (SLOTS * g.s1_count) as u64;

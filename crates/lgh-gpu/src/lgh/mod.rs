@@ -44,8 +44,10 @@ use crate::pool::Lease;
 
 mod chain;
 mod held;
+mod lights;
 mod upload;
 
+pub use lights::sources as light_table_sources;
 use upload::{Params, Tables};
 
 /// The lighting grid hierarchy with its lighting loop and shadow rays on the GPU.
@@ -99,9 +101,20 @@ impl IndirectMethod for GpuLgh {
             Prepared::Frame(frame) => frame,
         };
         let g = inputs.gbuffer;
+        // The shaded lights' table and spheres made on the GPU from what the builds hold
+        // (else packed on the CPU).
+        let (made, table_ms) = {
+            let t = frame.tables(g.width, g.height).ok_or_else(missing_tables)?;
+            lights::make(ctx, inputs, &t, &hierarchies).map_err(fail)?
+        };
+        let (table, spheres) = match made {
+            Some(l) => (Some(l.table), Some((l.spheres, l.flags))),
+            None => (None, None),
+        };
         // The tile binning on the GPU; lists larger than its buffers on the CPU.
         let gbuffer = ctx.gbuffer(g).map_err(fail)?;
-        let bins = match crate::bins::record(ctx, g, inputs.camera, &gbuffer, &frame.spheres()) {
+        let sp = frame.spheres();
+        let bins = match crate::bins::record(ctx, g, inputs.camera, &gbuffer, &sp, spheres) {
             Ok(bins) => Some(bins),
             Err(GpuError::TooLarge(_)) => {
                 frame.bin_on_cpu(inputs, memory);
@@ -109,11 +122,18 @@ impl IndirectMethod for GpuLgh {
             }
             Err(e) => return Err(fail(e)),
         };
-        let tables = frame.tables(g.width, g.height).ok_or_else(|| {
-            RenderError::Backend("lgh on the GPU: the hierarchies' tables are missing".into())
-        })?;
+        let tables = frame.tables(g.width, g.height).ok_or_else(missing_tables)?;
         let filter = frame.ratio_filter(inputs);
-        let held = OnGpu { bins, hierarchies };
+        let mut before = Vec::new();
+        if table.is_some() {
+            before.push(("light_table", table_ms));
+        }
+        let held = OnGpu {
+            bins,
+            hierarchies,
+            lights: table,
+            before,
+        };
         if crate::ratio::supported(&filter) {
             // The loop, the blur and the ratio estimator in one submission.
             let (shadowed, overdraw, timings) =
@@ -123,6 +143,11 @@ impl IndirectMethod for GpuLgh {
         let shaded = lighting_loop(ctx, inputs, &tables, held).map_err(fail)?;
         Ok(frame.finish_with(inputs, shaded, memory, Some(gpu_atrous)))
     }
+}
+
+/// The error of a frame prepared without the loop's tables.
+fn missing_tables() -> RenderError {
+    RenderError::Backend("lgh on the GPU: the hierarchies' tables are missing".into())
 }
 
 /// The ratio estimator's a-trous filter on the GPU ([`crate::atrous`]); false (the CPU's
@@ -181,6 +206,10 @@ pub fn source() -> String {
 pub(super) struct OnGpu<'c> {
     pub bins: Option<GpuBins<'c>>,
     pub hierarchies: Vec<Option<crate::grid::Held<'c>>>,
+    /// The shaded lights' table, where the GPU made it ([`lights::make`]).
+    pub lights: Option<Lease<'c>>,
+    /// Submissions before the loop's, by name, with their wall times in milliseconds.
+    pub before: Vec<(&'static str, f64)>,
 }
 
 /// The lighting loop recorded into a batch, with the buffers it reads and writes.
@@ -192,8 +221,9 @@ pub(super) struct Loop<'c> {
     /// When the frame's GPU work began, and the milliseconds spent packing and uploading.
     pub start: Instant,
     pub upload_ms: f64,
-    /// The milliseconds of the tile binning's first submission ([`GpuBins::counts_ms`]).
-    pub counts_ms: f64,
+    /// The submissions before the loop's (the shaded lights' table, the tile binning's
+    /// counts, [`GpuBins::counts_ms`]), by name, with their wall times in milliseconds.
+    pub before: Vec<(&'static str, f64)>,
 }
 
 /// Packs and uploads the loop's inputs `tables` and records the loop (timed "lighting")
@@ -205,19 +235,26 @@ pub(super) fn record_loop<'c>(
     tables: &LghTables,
     held: OnGpu<'c>,
 ) -> Result<Loop<'c>, GpuError> {
-    let OnGpu { bins, hierarchies } = held;
+    let OnGpu {
+        bins,
+        hierarchies,
+        lights,
+        mut before,
+    } = held;
     let start = Instant::now();
     let g = inputs.gbuffer;
     let n = g.len();
     let scene = ctx.scene(inputs.world)?;
-    let packed = Tables::new(tables)?;
-    let (mut batch, lists, layout, counts_ms) = match (bins, &tables.bins) {
-        (Some(b), _) => (b.batch, b.lists, b.layout, b.counts_ms),
+    let packed = Tables::new(tables, lights.is_none())?;
+    let (mut batch, lists, layout) = match (bins, &tables.bins) {
+        (Some(b), _) => {
+            before.push(("tile_counts", b.counts_ms));
+            (b.batch, b.lists, b.layout)
+        }
         (None, Some(flat)) => (
             Batch::new(ctx),
             ctx.upload_parts("light lists", &packed.list_parts(flat))?,
             Tables::list_layout(flat),
-            0.0,
         ),
         (None, None) => {
             return Err(GpuError::Failed(
@@ -229,8 +266,12 @@ pub(super) fn record_loop<'c>(
     let params = ctx.uniform("lgh params", &params);
     let gbuffer = ctx.gbuffer(g)?;
     let (slots, reps) = held::join(ctx, &mut batch, tables, hierarchies)?;
+    let lights = match lights {
+        Some(table) => table,
+        None => ctx.upload("lights", &packed.lights)?,
+    };
     let buffers = vec![
-        ctx.upload("lights", &packed.lights)?,
+        lights,
         lists,
         ctx.upload_parts("hierarchy tables", &packed.word_parts(tables))?,
         reps,
@@ -253,25 +294,25 @@ pub(super) fn record_loop<'c>(
         gbuffer,
         start,
         upload_ms: start.elapsed().as_secs_f64() * 1e3,
-        counts_ms,
+        before,
     })
 }
 
 /// The GPU's pass times as the frame's timings, with "gpu_transfer" the rest of the wall
 /// time since `start` less `cpu_ms` (CPU work timed apart) and "gpu_upload" its part before
 /// the submission (`upload_ms`: packing and writing the tables); without timestamps,
-/// "lighting" stands for all of the GPU's work.
+/// "lighting" stands for all of the GPU's work. The submissions `before` the loop's (wall
+/// times) come first.
 pub(super) fn gpu_timings(
     gpu: &PassTimes,
     start: Instant,
     upload_ms: f64,
     cpu_ms: f64,
-    counts_ms: f64,
+    before: &[(&'static str, f64)],
 ) -> Timings {
     let mut t = Timings::default();
-    if counts_ms > 0.0 {
-        // The tile binning's first submission, before `start`.
-        t.push("tile_counts", counts_ms);
+    for &(name, ms) in before {
+        t.push(name, ms);
     }
     let wall = start.elapsed().as_secs_f64() * 1e3 - cpu_ms;
     if gpu.is_empty() {
@@ -308,7 +349,7 @@ fn lighting_loop<'c>(
         out,
         start,
         upload_ms,
-        counts_ms,
+        before,
         ..
     } = record_loop(ctx, inputs, tables, held)?;
     batch.read(out.buffer(), out.bytes())?;
@@ -331,6 +372,6 @@ fn lighting_loop<'c>(
             u: plane(2),
             rays: result.par_chunks(3).map(|p| p[1].w as u64).sum(),
         },
-        timings: gpu_timings(&gpu, start, upload_ms, 0.0, counts_ms),
+        timings: gpu_timings(&gpu, start, upload_ms, 0.0, &before),
     })
 }

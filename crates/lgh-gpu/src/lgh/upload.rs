@@ -71,16 +71,17 @@ pub(super) struct Tables {
 }
 
 impl Tables {
-    /// Packs `t`.
-    pub(super) fn new(t: &LghTables) -> Result<Self, GpuError> {
+    /// Packs `t` (its shaded lights only with `lights`: else the GPU made them,
+    /// [`super::lights`]).
+    pub(super) fn new(t: &LghTables, lights: bool) -> Result<Self, GpuError> {
         if t.hierarchies.len() > MAX_HIERARCHIES {
             return Err(GpuError::TooLarge(format!(
                 "{} hierarchies (at most {MAX_HIERARCHIES})",
                 t.hierarchies.len()
             )));
         }
-        let mut lights: Vec<[Vec4; 4]> = t
-            .lights
+        let all = if lights { t.lights } else { &[] };
+        let mut lights: Vec<[Vec4; 4]> = all
             .par_iter()
             .map(|l| {
                 let (rise, fall) = l.role.floors();
