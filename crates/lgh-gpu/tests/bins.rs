@@ -53,7 +53,9 @@ fn both(
         .flatten(w, h);
     let ctx = lgh_gpu::GpuContext::shared().expect("an adapter");
     let gbuffer = ctx.gbuffer(&g).expect("G-buffer");
-    let mut bins = lgh_gpu::bins::record(ctx, &g, &camera, &gbuffer, &sp, None).expect("bins");
+    let first = lgh_gpu::Batch::new(ctx);
+    let mut bins =
+        lgh_gpu::bins::record(ctx, first, &g, &camera, &gbuffer, &sp, None).expect("bins");
     let words = bins.layout.words(g.len());
     bins.batch
         .read(bins.lists.buffer(), 4 * words)

@@ -25,7 +25,7 @@ use lgh_render::methods::lgh::LightSpheres;
 use lgh_render::passes::gbuffer::GBuffer;
 use lgh_scene::camera::CameraFrame;
 
-use crate::batch::Batch;
+use crate::batch::{Batch, PassTimes};
 use crate::context::{GpuContext, GpuError};
 use crate::gbuffer::GpuGBuffer;
 use crate::pool::Lease;
@@ -89,8 +89,11 @@ pub struct GpuBins<'c> {
     pub lists: Lease<'c>,
     /// Its layout.
     pub layout: ListLayout,
-    /// The first submission (bounds and counts) and its wait.
+    /// The first submission (bounds and counts, after the work the caller recorded ahead of
+    /// them) and its wait, on the wall clock.
     pub counts_ms: f64,
+    /// The GPU's times of the first submission's passes (empty without timestamps).
+    pub first: PassTimes,
 }
 
 /// The WGSL sources of the kernels: bounds, count, write, sort, pixels.
@@ -163,15 +166,17 @@ fn groups(items: usize) -> u32 {
 }
 
 /// Bins the lights `spheres` over the G-buffer `g` (on the GPU as `gbuffer`) seen through
-/// `camera`: submits and waits for the counts, then records the lists' passes into the
-/// returned batch. The spheres as the kernels read them (centre and finite radius; sub-image
-/// with flags) are packed from `spheres` and uploaded, or are `on_gpu` already.
+/// `camera`: submits and waits for the counts (in `first`, after the work already recorded
+/// there), then records the lists' passes into the returned batch. The spheres as the
+/// kernels read them (centre and finite radius; sub-image with flags) are packed from
+/// `spheres` and uploaded, or are `on_gpu` already (made by the work in `first`).
 ///
 /// # Errors
 /// More lights, lists or list entries than the buffers or a u32 index hold (the caller
 /// bins on the CPU instead), or the GPU failed.
 pub fn record<'c>(
     ctx: &'c GpuContext,
+    first: Batch<'c>,
     g: &GBuffer,
     camera: &CameraFrame,
     gbuffer: &GpuGBuffer,
@@ -215,7 +220,7 @@ pub fn record<'c>(
     let counts = ctx.output("bin counts", 4 * u64::from(lists))?;
     let starts = ctx.output("bin starts", 4 * u64::from(lists))?;
     let total = ctx.output("bin total", 16)?;
-    let mut batch = Batch::new(ctx);
+    let mut batch = first;
     let pipeline = ctx.pipeline("bin bounds", || bounds_src);
     let bind = ctx.bind_group(
         &pipeline,
@@ -243,7 +248,7 @@ pub fn record<'c>(
         false,
     )?;
     batch.read(total.buffer(), 4)?;
-    let (reads, _) = batch.finish()?;
+    let (reads, first) = batch.finish()?;
     let entries = reads
         .first()
         .and_then(|r| bytemuck::cast_slice::<_, u32>(r).first().copied())
@@ -297,5 +302,6 @@ pub fn record<'c>(
         lists: lists_buf,
         layout,
         counts_ms: start.elapsed().as_secs_f64() * 1e3,
+        first,
     })
 }

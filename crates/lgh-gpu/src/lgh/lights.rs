@@ -203,28 +203,6 @@ pub(super) fn record<'c>(
     Ok(Some(out))
 }
 
-/// [`record`] in a submission of its own, waited for: the shaded lights made on the GPU
-/// (where they can be) before the tile binning reads their spheres, and the wall time it
-/// took, as "light_table".
-///
-/// # Errors
-/// As [`record`], or the GPU failed.
-pub(super) fn make<'c>(
-    ctx: &'c GpuContext,
-    inputs: &MethodInputs,
-    t: &LghTables,
-    held: &[Option<Held<'c>>],
-) -> Result<(Option<GpuLights<'c>>, f64), GpuError> {
-    let start = std::time::Instant::now();
-    let mut batch = Batch::new(ctx);
-    let made = record(ctx, &mut batch, inputs, t, held, t.lights.len())?;
-    if made.is_none() {
-        return Ok((None, 0.0));
-    }
-    batch.finish()?;
-    Ok((made, start.elapsed().as_secs_f64() * 1e3))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

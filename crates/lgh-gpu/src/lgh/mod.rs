@@ -102,37 +102,37 @@ impl IndirectMethod for GpuLgh {
         };
         let g = inputs.gbuffer;
         // The shaded lights' table and spheres made on the GPU from what the builds hold
-        // (else packed on the CPU).
-        let (made, table_ms) = {
+        // (else packed on the CPU), in the tile binning's first submission.
+        let mut first = Batch::new(ctx);
+        let made = {
             let t = frame.tables(g.width, g.height).ok_or_else(missing_tables)?;
-            lights::make(ctx, inputs, &t, &hierarchies).map_err(fail)?
+            lights::record(ctx, &mut first, inputs, &t, &hierarchies, t.lights.len())
+                .map_err(fail)?
         };
-        let (table, spheres) = match made {
+        let (mut table, spheres) = match made {
             Some(l) => (Some(l.table), Some((l.spheres, l.flags))),
             None => (None, None),
         };
-        // The tile binning on the GPU; lists larger than its buffers on the CPU.
+        // The tile binning on the GPU; lists larger than its buffers on the CPU (and the
+        // table, whose making may not have been submitted, packed on the CPU).
         let gbuffer = ctx.gbuffer(g).map_err(fail)?;
         let sp = frame.spheres();
-        let bins = match crate::bins::record(ctx, g, inputs.camera, &gbuffer, &sp, spheres) {
+        let bins = match crate::bins::record(ctx, first, g, inputs.camera, &gbuffer, &sp, spheres) {
             Ok(bins) => Some(bins),
             Err(GpuError::TooLarge(_)) => {
                 frame.bin_on_cpu(inputs, memory);
+                table = None;
                 None
             }
             Err(e) => return Err(fail(e)),
         };
         let tables = frame.tables(g.width, g.height).ok_or_else(missing_tables)?;
         let filter = frame.ratio_filter(inputs);
-        let mut before = Vec::new();
-        if table.is_some() {
-            before.push(("light_table", table_ms));
-        }
         let held = OnGpu {
             bins,
             hierarchies,
             lights: table,
-            before,
+            before: Vec::new(),
         };
         if crate::ratio::supported(&filter) {
             // The loop, the blur and the ratio estimator in one submission.
@@ -248,7 +248,10 @@ pub(super) fn record_loop<'c>(
     let packed = Tables::new(tables, lights.is_none())?;
     let (mut batch, lists, layout) = match (bins, &tables.bins) {
         (Some(b), _) => {
+            // The first submission on the wall clock; the shaded lights' table's share of
+            // it from the GPU's timestamps, where it has them.
             before.push(("tile_counts", b.counts_ms));
+            before.extend(b.first.iter().filter(|(name, _)| *name == "light_table"));
             (b.batch, b.lists, b.layout)
         }
         (None, Some(flat)) => (
