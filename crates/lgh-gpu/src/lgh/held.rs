@@ -137,25 +137,17 @@ fn joined<'c>(
 mod tests {
     use super::*;
     use crate::grid::{GpuGridBuilder, LIGHT_FLOATS};
+    use crate::lgh::testing::{FrameInputs, cornell, prepare};
     use glam::Vec3;
     use lgh_core::color::luminance;
     use lgh_core::lighting_grid::HierarchyBuilder;
-    use lgh_render::memory::FrameMemory;
-    use lgh_render::methods::MethodInputs;
-    use lgh_render::methods::lgh::{LghFrame, Prepared};
-    use lgh_render::passes::gbuffer::GBuffer;
-    use lgh_render::passes::vpl_gen::generate_vpls;
-    use lgh_render::{RenderSettings, Silent, World};
+    use lgh_render::RenderSettings;
 
     /// The joined representatives and their VPLs of the default scene's frame (one
     /// hierarchy, or six by normal), read back: from what the GPU builds held (`keep`:
     /// the representatives too) or packed from the tables of hierarchies the CPU built.
     fn read_joined(normal_bins: bool, on_gpu: bool, keep: bool) -> (Vec<u32>, Vec<f32>) {
-        let mut scene = lgh_scene::cornell::cornell_box();
-        scene
-            .finish(std::path::Path::new("<built-in cornell>"))
-            .expect("scene");
-        let world = World::new(scene);
+        let world = cornell();
         let mut s = RenderSettings {
             width: 32,
             height: 18,
@@ -163,27 +155,12 @@ mod tests {
             ..RenderSettings::default()
         };
         s.lgh.normal_bins = normal_bins;
-        let camera = world.scene.camera().frame(s.width, s.height);
-        let g = GBuffer::render(&world, &camera, s.width, s.height);
-        let vpls = generate_vpls(&world, s.vpls, s.bounces, s.seed, s.path_numbers);
-        let inputs = MethodInputs {
-            world: &world,
-            gbuffer: &g,
-            camera: &camera,
-            vpls: &vpls.vpls,
-            settings: &s,
-            progress: &Silent,
-        };
+        let made = FrameInputs::new(&world, &s);
         let ctx = GpuContext::shared().expect("an adapter");
         let mut builder = GpuGridBuilder::new(ctx);
         builder.keep_representatives(keep);
-        let mut memory = FrameMemory::default();
         let b: Option<&mut dyn HierarchyBuilder> = on_gpu.then_some(&mut builder as _);
-        let Ok(Prepared::Frame(frame)) =
-            LghFrame::prepare_with(&inputs, true, &mut memory, true, b)
-        else {
-            panic!("a frame with VPLs");
-        };
+        let frame = prepare(&made.inputs(&world, &s), b);
         let held = builder.take_held();
         let tables = frame.tables(s.width, s.height).expect("tables");
         let hierarchies = tables.hierarchies.len();
@@ -200,7 +177,7 @@ mod tests {
         let (slots, reps) = join(ctx, &mut batch, &tables, held).expect("joined");
         let s1: usize = tables.hierarchies.iter().map(|h| h.grid.s1_count).sum();
         let total: usize = tables.hierarchies.iter().map(|h| h.grid.vpl_count).sum();
-        assert_eq!(total, vpls.vpls.len());
+        assert_eq!(total, made.vpl_count());
         batch
             .read(slots.buffer(), 4 * (SLOTS * s1) as u64)
             .expect("read");

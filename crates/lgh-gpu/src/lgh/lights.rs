@@ -207,12 +207,9 @@ pub(super) fn record<'c>(
 mod tests {
     use super::*;
     use crate::grid::GpuGridBuilder;
+    use crate::lgh::testing::{FrameInputs, cornell, prepare};
     use glam::Vec4;
-    use lgh_render::memory::FrameMemory;
-    use lgh_render::methods::lgh::{LghFrame, Prepared};
-    use lgh_render::passes::gbuffer::GBuffer;
-    use lgh_render::passes::vpl_gen::generate_vpls;
-    use lgh_render::{RenderSettings, Silent, World};
+    use lgh_render::{RenderSettings, World};
 
     /// The shaded lights of `world`'s frame of `s`, as the GPU makes them (table, spheres,
     /// flags) and as the CPU packs them.
@@ -224,26 +221,12 @@ mod tests {
         (Vec<[Vec4; 4]>, Vec<Vec4>, Vec<u32>),
         (Vec<[Vec4; 4]>, Vec<Vec4>, Vec<u32>),
     ) {
-        let camera = world.scene.camera().frame(s.width, s.height);
-        let g = GBuffer::render(world, &camera, s.width, s.height);
-        let vpls = generate_vpls(world, s.vpls, s.bounces, s.seed, s.path_numbers);
-        let inputs = MethodInputs {
-            world,
-            gbuffer: &g,
-            camera: &camera,
-            vpls: &vpls.vpls,
-            settings: s,
-            progress: &Silent,
-        };
+        let made = FrameInputs::new(world, s);
+        let inputs = made.inputs(world, s);
         let ctx = GpuContext::shared().expect("an adapter");
         let mut builder = GpuGridBuilder::new(ctx);
         builder.keep_representatives(true);
-        let mut memory = FrameMemory::default();
-        let Ok(Prepared::Frame(frame)) =
-            LghFrame::prepare_with(&inputs, true, &mut memory, true, Some(&mut builder))
-        else {
-            panic!("a frame with VPLs");
-        };
+        let frame = prepare(&inputs, Some(&mut builder));
         let held = builder.take_held();
         let t = frame.tables(s.width, s.height).expect("tables");
         let cpu_table = super::super::upload::Tables::new(&t, true)
@@ -291,12 +274,8 @@ mod tests {
     fn the_gpu_makes_the_cpus_shaded_lights() {
         let two_rooms = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../scenes/test/two-rooms.toml");
-        let mut cornell = lgh_scene::cornell::cornell_box();
-        cornell
-            .finish(std::path::Path::new("<built-in cornell>"))
-            .expect("scene");
         let worlds = [
-            World::new(cornell),
+            cornell(),
             World::new(lgh_scene::load(&two_rooms).expect("scene")),
         ];
         for world in &worlds {

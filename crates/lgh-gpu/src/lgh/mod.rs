@@ -45,6 +45,8 @@ use crate::pool::Lease;
 mod chain;
 mod held;
 mod lights;
+#[cfg(test)]
+mod testing;
 mod upload;
 
 pub use lights::sources as light_table_sources;
