@@ -205,13 +205,13 @@ pub struct GpuGridBuilder<'c> {
 
 /// What the GPU holds of one build for the frame's later passes.
 pub struct Held<'c> {
-    /// The build's input lights ([`LIGHT_BYTES`] a light: position, intensity, normal).
+    /// The build's input lights (36 bytes a light: position, intensity, normal).
     pub lights: Lease<'c>,
     /// The S_1 lights' [`SLOTS`] representatives each (indices into the lights), in grid
     /// order, where the build drew them and keeps them
     /// ([`GpuGridBuilder::keep_representatives`]).
     pub slots: Option<Lease<'c>>,
-    /// The grid lights as the build emitted them ([`RECORD_WORDS`] words each: vertex and
+    /// The grid lights as the build emitted them (16 words each: vertex and
     /// mass, position, intensity, normal, the deviation in the fourth word of the last
     /// three), level by level from S_1, the zero-intensity ones still among them (the CPU
     /// drops them as it unpacks), where the build keeps them
