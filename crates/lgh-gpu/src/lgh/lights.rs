@@ -137,6 +137,7 @@ pub(super) fn record<'c>(
             count: at,
             base: h.grid_base,
             n2,
+            // lgh's VPLs always carry normals (`Vpls::as_input`), and so do the records.
             normals: 1,
             scale: n2 as f32,
             energy: u32::from(settings.emission == GridEmission::EnergyConserving),
