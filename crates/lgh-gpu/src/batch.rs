@@ -9,7 +9,7 @@ use crate::context::{GpuContext, GpuError};
 use crate::pool::Lease;
 
 /// Timed passes one batch holds at most (further passes run untimed).
-const MAX_TIMED: u32 = 32;
+const MAX_TIMED: u32 = 128;
 
 /// The times of a batch's passes, in milliseconds, summed by name in the order first seen.
 pub type PassTimes = Vec<(&'static str, f64)>;

@@ -30,6 +30,7 @@ fn every_shader_is_valid_wgsl() {
     .chain(lgh_gpu::vpls::sources())
     .chain(lgh_gpu::grid::sources().into_iter().map(|(_, s)| s))
     .chain(lgh_gpu::lgh::light_table_sources())
+    .chain(lgh_gpu::lgh::lookup_sources())
     .chain(lgh_gpu::bins::sources())
     {
         validate(&source);

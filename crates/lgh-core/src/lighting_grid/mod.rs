@@ -442,6 +442,15 @@ pub trait HierarchyBuilder: Send {
     fn keeps_representatives(&self) -> bool {
         false
     }
+
+    /// Whether the last build's grid stays on the builder's device, which makes from it the
+    /// unbiased estimate's lookup tables (where each vertex row of a level starts, and the
+    /// children of every light of level >= 2 with the running sums of their weights,
+    /// [`descent::Descent`]) for the frame's later passes, so that the caller need not make
+    /// them. The CPU's: false.
+    fn makes_lookups(&self) -> bool {
+        false
+    }
 }
 
 impl HierarchyBuilder for GridBuilder {

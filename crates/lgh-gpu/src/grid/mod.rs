@@ -356,6 +356,10 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
         matches!(self.kept.last(), Some(Some(h)) if h.slots.is_some())
     }
 
+    fn makes_lookups(&self) -> bool {
+        matches!(self.kept.last(), Some(Some(h)) if h.records.is_some())
+    }
+
     fn grid(&self) -> Option<&LightingGrid> {
         let s = self.state.as_ref().filter(|s| s.built)?;
         if s.on_cpu {

@@ -24,7 +24,8 @@ enum Part<'c> {
 /// The loop's buffers of the representatives (`SLOTS` words per S_1 light, hierarchy after
 /// hierarchy) and of the VPLs they index ([`LIGHT_BYTES`] a VPL: position, flux, normal, the
 /// build's layout), from what the GPU holds of each hierarchy (`held`, in hierarchy order)
-/// or from the tables `t`. The copies are recorded in `batch`, which keeps what they read.
+/// or from the tables `t`. The copies are recorded in `batch`, which keeps what they read and
+/// the builds' records (which the lookups read, [`super::lookups`]).
 ///
 /// # Errors
 /// `held` does not match the hierarchies, a hierarchy's part is neither held nor in the
@@ -58,7 +59,19 @@ pub(super) fn join<'c>(
     for (h, held) in t.hierarchies.iter().zip(held) {
         let g: &GridTables = h.grid;
         let (on_gpu_vpls, on_gpu_slots) = match held {
-            Some(Held { lights, slots, .. }) => (Some(lights), slots),
+            Some(Held {
+                lights,
+                slots,
+                records,
+                ..
+            }) => {
+                // The lookups read the records in this batch ([`super::lookups`]): a lease
+                // dropped before its batch ran may be leased by another frame.
+                if let Some(records) = records {
+                    batch.keep(records);
+                }
+                (Some(lights), slots)
+            }
             None => (None, None),
         };
         let slot_bytes = 4 * (SLOTS * g.s1_count) as u64;

@@ -45,11 +45,13 @@ use crate::pool::Lease;
 mod chain;
 mod held;
 mod lights;
+mod lookups;
 #[cfg(test)]
 mod testing;
 mod upload;
 
 pub use lights::sources as light_table_sources;
+pub use lookups::sources as lookup_sources;
 use upload::{Params, Tables};
 
 /// The lighting grid hierarchy with its lighting loop and shadow rays on the GPU.
@@ -111,9 +113,9 @@ impl IndirectMethod for GpuLgh {
             lights::record(ctx, &mut first, inputs, &t, &hierarchies, t.lights.len())
                 .map_err(fail)?
         };
-        let (mut table, spheres) = match made {
-            Some(l) => (Some(l.table), Some((l.spheres, l.flags))),
-            None => (None, None),
+        let (mut table, spheres, mut numbered) = match made {
+            Some(l) => (Some(l.table), Some((l.spheres, l.flags)), l.numbered),
+            None => (None, None, Vec::new()),
         };
         // The tile binning on the GPU; lists larger than its buffers on the CPU (and the
         // table, whose making may not have been submitted, packed on the CPU).
@@ -124,6 +126,7 @@ impl IndirectMethod for GpuLgh {
             Err(GpuError::TooLarge(_)) => {
                 frame.bin_on_cpu(inputs, memory);
                 table = None;
+                numbered = Vec::new();
                 None
             }
             Err(e) => return Err(fail(e)),
@@ -134,6 +137,7 @@ impl IndirectMethod for GpuLgh {
             bins,
             hierarchies,
             lights: table,
+            numbered,
             before: Vec::new(),
         };
         if crate::ratio::supported(&filter) {
@@ -208,8 +212,11 @@ pub fn source() -> String {
 pub(super) struct OnGpu<'c> {
     pub bins: Option<GpuBins<'c>>,
     pub hierarchies: Vec<Option<crate::grid::Held<'c>>>,
-    /// The shaded lights' table, where the GPU made it ([`lights::make`]).
+    /// The shaded lights' table, where the GPU made it ([`lights::record`]).
     pub lights: Option<Lease<'c>>,
+    /// Per hierarchy, its build's records numbered where the shaded lights were made
+    /// (else empty: [`lookups::record`] numbers them).
+    pub numbered: Vec<Option<lights::Numbered<'c>>>,
     /// Submissions before the loop's, by name, with their wall times in milliseconds.
     pub before: Vec<(&'static str, f64)>,
 }
@@ -241,6 +248,7 @@ pub(super) fn record_loop<'c>(
         bins,
         hierarchies,
         lights,
+        numbered,
         mut before,
     } = held;
     let start = Instant::now();
@@ -270,18 +278,22 @@ pub(super) fn record_loop<'c>(
     let params = Params::new(inputs, tables, &packed, layout)?;
     let params = ctx.uniform("lgh params", &params);
     let gbuffer = ctx.gbuffer(g)?;
+    let words = packed.words(ctx, &mut batch, tables)?;
+    lookups::record(
+        ctx,
+        &mut batch,
+        tables,
+        &packed,
+        &hierarchies,
+        numbered,
+        &words,
+    )?;
     let (slots, reps) = held::join(ctx, &mut batch, tables, hierarchies)?;
     let lights = match lights {
         Some(table) => table,
         None => ctx.upload("lights", &packed.lights)?,
     };
-    let buffers = vec![
-        lights,
-        lists,
-        ctx.upload_parts("hierarchy tables", &packed.word_parts(tables))?,
-        reps,
-        slots,
-    ];
+    let buffers = vec![lights, lists, words, reps, slots];
     // Every pixel's three words are written by the kernel: no clearing.
     let out = ctx.output("A, S, U", 48 * n as u64)?;
     let pipeline = ctx.pipeline("lgh", source);

@@ -10,9 +10,11 @@ use lgh_core::lighting_grid::representative::SLOTS;
 
 use lgh_render::shading::tiles::FlatBins;
 
+use crate::batch::Batch;
 use crate::bins::ListLayout;
-use crate::context::GpuError;
+use crate::context::{GpuContext, GpuError};
 use crate::grid::LIGHT_FLOATS;
+use crate::pool::Lease;
 
 /// Hierarchies the uniform holds (the six normal bins, and room).
 pub(super) const MAX_HIERARCHIES: usize = 8;
@@ -68,6 +70,8 @@ pub(super) struct Tables {
     children: Vec<Vec<u32>>,
     /// Each hierarchy's place in the words, the representatives and their VPLs.
     hier: Vec<Hier>,
+    /// The words of all hierarchies.
+    words: usize,
 }
 
 impl Tables {
@@ -108,17 +112,32 @@ impl Tables {
                     .zip(&grid.vertex_x)
                     .for_each(|(light, &x)| light[3].w = f32::from_bits(x));
             }
+            // Where the GPU makes the lookups (`lookups.rs`): the CPU's sizes, the children's
+            // at most 27 a light of level >= 2.
+            let on_device = grid.lookups_on_device;
             let rows_base = words as u32;
-            words += grid.rows.iter().map(Vec::len).sum::<usize>();
+            words += if on_device {
+                super::lookups::row_entries(grid.geometry.l_max)
+            } else {
+                grid.rows.iter().map(Vec::len).sum::<usize>()
+            };
             let starts_base = words as u32;
-            words += h.descent_starts.len();
+            words += if on_device {
+                grid.len + 1
+            } else {
+                h.descent_starts.len()
+            };
             let children_base = words as u32;
             let pairs: Vec<u32> = h
                 .descent_children
                 .par_iter()
                 .flat_map_iter(|&(c, sum)| [c, sum.to_bits()])
                 .collect();
-            words += pairs.len();
+            words += if on_device {
+                2 * super::lookups::MAX_CHILDREN * grid.len.saturating_sub(grid.s1_count)
+            } else {
+                pairs.len()
+            };
             children.push(pairs);
             let reps_base = slots as u32;
             slots += SLOTS * grid.s1_count;
@@ -149,7 +168,15 @@ impl Tables {
             order,
             children,
             hier,
+            words,
         })
+    }
+
+    /// Where hierarchy `i`'s vertex rows, descent starts and descent children begin in the
+    /// words.
+    pub(super) fn word_bases(&self, i: usize) -> (u32, u32, u32) {
+        let h = &self.hier[i];
+        (h.rows_base, h.starts_base, h.children_base)
     }
 
     /// The lists buffer of the CPU's bins `bins` (these tables packed with them), laid out
@@ -176,18 +203,51 @@ impl Tables {
         }
     }
 
-    /// The hierarchy buffer (words): per hierarchy its vertex-row starts of levels
+    /// One hierarchy's words as the CPU made them: its vertex-row starts of levels
     /// 1..=l_max, descent starts, and descent children as (child, bits of the running sum).
-    /// (The S_1 lights' representatives and the VPLs they index are joined apart,
-    /// [`super::held`].)
-    pub(super) fn word_parts<'s>(&'s self, t: &'s LghTables) -> Vec<&'s [u8]> {
-        let mut parts: Vec<&[u8]> = Vec::new();
-        for (h, children) in t.hierarchies.iter().zip(&self.children) {
-            parts.extend(h.grid.rows.iter().map(|r| bytemuck::cast_slice(r)));
-            parts.push(bytemuck::cast_slice(h.descent_starts));
-            parts.push(bytemuck::cast_slice(children));
-        }
+    fn word_parts<'s>(&'s self, t: &'s LghTables, i: usize) -> Vec<&'s [u8]> {
+        let h = &t.hierarchies[i];
+        let mut parts: Vec<&[u8]> = h
+            .grid
+            .rows
+            .iter()
+            .map(|r| bytemuck::cast_slice(r))
+            .collect();
+        parts.push(bytemuck::cast_slice(h.descent_starts));
+        parts.push(bytemuck::cast_slice(&self.children[i]));
         parts
+    }
+
+    /// The hierarchy buffer (words), hierarchy after hierarchy, of `t` packed as these
+    /// tables: the CPU's words uploaded; where the GPU makes a hierarchy's lookups
+    /// ([`super::lookups`], recorded afterwards into `batch`), its place left for them and
+    /// the CPU's parts of the others copied in by `batch`. (The S_1 lights'
+    /// representatives and the VPLs they index are joined apart, [`super::held`].)
+    ///
+    /// # Errors
+    /// A buffer cannot be had.
+    pub(super) fn words<'c>(
+        &self,
+        ctx: &'c GpuContext,
+        batch: &mut Batch<'c>,
+        t: &LghTables,
+    ) -> Result<Lease<'c>, GpuError> {
+        let label = "hierarchy tables";
+        let all = 0..t.hierarchies.len();
+        if !t.hierarchies.iter().any(|h| h.grid.lookups_on_device) {
+            let parts: Vec<&[u8]> = all.flat_map(|i| self.word_parts(t, i)).collect();
+            return ctx.upload_parts(label, &parts);
+        }
+        let words = ctx.output(label, 4 * self.words as u64)?;
+        for i in all.filter(|&i| !t.hierarchies[i].grid.lookups_on_device) {
+            let parts = self.word_parts(t, i);
+            let bytes: usize = parts.iter().map(|p| p.len()).sum();
+            let part = ctx.upload_parts("hierarchy part", &parts)?;
+            let at = 4 * u64::from(self.hier[i].rows_base);
+            batch.copy(&part, 0, &words, at, bytes as u64);
+            batch.keep(part);
+        }
+        Ok(words)
     }
 }
 

@@ -62,6 +62,21 @@ pub(super) struct ShadeLights {
     pub(super) hierarchies: Vec<Hierarchy>,
 }
 
+/// What a hierarchy builder's device keeps of its last build for a frame whose loop runs
+/// there ([`lgh_core::lighting_grid::HierarchyBuilder::keeps_lights`],
+/// [`keeps_representatives`](lgh_core::lighting_grid::HierarchyBuilder::keeps_representatives),
+/// [`makes_lookups`](lgh_core::lighting_grid::HierarchyBuilder::makes_lookups)): the CPU
+/// does not make these.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct DeviceKeeps {
+    /// The build's input lights (the VPLs the representatives index).
+    pub lights: bool,
+    /// The S_1 lights' representatives.
+    pub representatives: bool,
+    /// The vertex rows and the descent's children.
+    pub lookups: bool,
+}
+
 /// One hierarchy as the unbiased estimate reads it (docs/design.md, "Unbiased estimate"):
 /// its centroids by vertex for Lambda_i, the children of its lights for the draw of an S_1
 /// light, and the S_1 lights' representatives (with their VPLs' colours).
@@ -248,9 +263,8 @@ impl ShadeLights {
     /// all-scatter), whose lights [`ShadeLights::add_hierarchy`] added from
     /// index `first` with levels `levels`: the representatives of its S_1 lights (drawn with
     /// `seed`, or `drawn` already where the builder drew them), the children of its coarser
-    /// lights and its centroids by vertex. With `tables`, a copy of the VPLs for them unless
-    /// the builder keeps them on its device (`keeps.0`), and the representatives unless it
-    /// drew them and keeps them there (`keeps.1`).
+    /// lights and its centroids by vertex. With `tables`, what the builder's device keeps
+    /// (`keeps`) is not made: a copy of the VPLs, the representatives, the lookups.
     pub(super) fn add_unbiased(
         &mut self,
         grid: &LightingGrid,
@@ -258,7 +272,7 @@ impl ShadeLights {
         levels: ShadedLevels,
         (seed, drawn): (u64, Option<&[[u32; SLOTS]]>),
         first: usize,
-        (tables, keeps): (bool, (bool, bool)),
+        (tables, keeps): (bool, DeviceKeeps),
     ) {
         // S_1 only: the draw below a coarser light is made afresh per sample. With tables the
         // frame is for another backend's loop, which reads the slots' VPL indices (the GPU
@@ -267,7 +281,7 @@ impl ShadeLights {
         let drawn = drawn.filter(|d| d.len() == grid.level_range(1).len());
         let input = vpls.as_input();
         let (reps, slots): (Vec<RepSet>, Vec<[u32; SLOTS]>) = match (tables, drawn) {
-            (true, _) if keeps.1 => (Vec::new(), Vec::new()),
+            (true, _) if keeps.representatives => (Vec::new(), Vec::new()),
             (true, Some(d)) => (Vec::new(), d.to_vec()),
             (true, None) => (Vec::new(), s1_representatives(grid, &input, seed, |s| *s)),
             (false, Some(d)) => (
@@ -279,15 +293,21 @@ impl ShadeLights {
                 Vec::new(),
             ),
         };
-        let rows = VertexRows::new(grid);
+        // The walk's children, unless the device makes them from its own copy of the grid.
+        let lookups = tables && keeps.lookups;
+        let descent = if lookups {
+            Descent::default()
+        } else {
+            Descent::new(VertexLookup::new(grid, &VertexRows::new(grid)))
+        };
         let vpl_lights = if levels.lowest == 0 { vpls.len() } else { 0 };
         self.hierarchies.push(Hierarchy {
             reps,
             partition: (!tables).then(|| Partition::new(grid, levels)),
-            descent: Descent::new(VertexLookup::new(grid, &rows)),
+            descent,
             first,
             grid_base: first + vpl_lights,
-            tables: tables.then(|| GridTables::new(grid, levels, slots.into_iter(), vpls, keeps.0)),
+            tables: tables.then(|| GridTables::new(grid, levels, slots.into_iter(), vpls, keeps)),
         });
     }
 

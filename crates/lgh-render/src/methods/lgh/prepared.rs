@@ -17,7 +17,7 @@ use lgh_core::vpl::Vpls;
 use rayon::prelude::*;
 
 use super::LghStats;
-use super::lights::{LghTargets, ShadeLights, split_by_normal};
+use super::lights::{DeviceKeeps, LghTargets, ShadeLights, split_by_normal};
 use super::settings::{DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt};
 use super::settings::{ShadowTarget, auto_tile};
 use super::shade::{RowContext, RowScratch, shade_rows};
@@ -225,10 +225,11 @@ impl LghFrame {
                         alpha: settings.alpha,
                     };
                     let drawn = builder.representatives();
-                    let keeps = (
-                        tables && builder.keeps_lights(),
-                        tables && builder.keeps_representatives(),
-                    );
+                    let keeps = DeviceKeeps {
+                        lights: tables && builder.keeps_lights(),
+                        representatives: tables && builder.keeps_representatives(),
+                        lookups: tables && builder.makes_lookups(),
+                    };
                     lights.add_unbiased(grid, group, levels, (seed, drawn), first, (tables, keeps));
                 } else {
                     lights.add_representatives(

@@ -16,7 +16,7 @@ use rayon::prelude::*;
 
 use super::LghFrame;
 use super::light_batch::PackedLight;
-use super::lights::chroma;
+use super::lights::{DeviceKeeps, chroma};
 use crate::shading::tiles::FlatBins;
 
 /// One hierarchy's grid as flat tables: its geometry and shaded levels, the x coordinate
@@ -31,8 +31,16 @@ pub struct GridTables {
     pub levels: ShadedLevels,
     /// Per grid light, the x coordinate of its vertex.
     pub vertex_x: Vec<u32>,
-    /// Per level l = 1..=l_max (index l - 1), the row starts.
+    /// Per level l = 1..=l_max (index l - 1), the row starts; empty where the builder's
+    /// device makes them ([`GridTables::lookups_on_device`]).
     pub rows: Vec<Vec<u32>>,
+    /// Whether the builder's device makes the vertex rows and the descent's children
+    /// itself from its copy of the grid
+    /// ([`lgh_core::lighting_grid::HierarchyBuilder::makes_lookups`]): `rows` and the
+    /// hierarchy's descent tables are then empty.
+    pub lookups_on_device: bool,
+    /// The number of grid lights.
+    pub len: usize,
     /// Per S_1 light (by grid index), its [`SLOTS`] representatives: indices into `vpls`,
     /// [`lgh_core::lighting_grid::representative::NONE`] for an empty slot; empty where the
     /// builder keeps them on its device
@@ -49,25 +57,28 @@ pub struct GridTables {
 
 impl GridTables {
     /// The tables of `grid`, built from `vpls` and shaded at `levels`, with its S_1
-    /// lights' representatives `rep_vpls`; without a copy of the VPLs where the builder
-    /// `keeps` them.
+    /// lights' representatives `rep_vpls`; without a copy of the VPLs, nor the vertex
+    /// rows, where the builder `keeps` them.
     #[must_use]
     pub(super) fn new(
         grid: &LightingGrid,
         levels: ShadedLevels,
         rep_vpls: impl Iterator<Item = [u32; SLOTS]>,
         vpls: &Vpls,
-        keeps: bool,
+        keeps: DeviceKeeps,
     ) -> Self {
+        let rows = if keeps.lookups { 0 } else { grid.l_max() };
         Self {
             geometry: grid.geometry,
             levels,
             vertex_x: grid.vertex.par_iter().map(|v| v.x).collect(),
-            rows: (1..=grid.l_max()).map(|l| row_starts(grid, l)).collect(),
+            rows: (1..=rows).map(|l| row_starts(grid, l)).collect(),
+            lookups_on_device: keeps.lookups,
+            len: grid.len(),
             rep_vpls: rep_vpls.collect(),
             s1_count: grid.level_range(1).len(),
             vpl_count: vpls.len(),
-            vpls: (0..if keeps { 0 } else { vpls.len() })
+            vpls: (0..if keeps.lights { 0 } else { vpls.len() })
                 .into_par_iter()
                 .map(|i| RepSlot {
                     position: vpls.positions[i],
