@@ -28,6 +28,7 @@ pub mod lookup;
 pub mod partition;
 pub mod reference;
 pub mod representative;
+pub mod shape;
 pub mod splat;
 pub mod synthetic;
 
@@ -37,6 +38,7 @@ use glam::{UVec3, Vec3};
 use rayon::prelude::*;
 
 pub use geometry::{GridGeometry, MAX_LEVELS};
+pub use shape::GridShape;
 pub use splat::{Level, Sources, Workspace};
 
 /// The input lights of a hierarchy (S_0): positions, RGB intensities and optional normals.
@@ -407,8 +409,16 @@ pub trait HierarchyBuilder: Send {
         construction: Construction,
     ) -> Result<BuildTimings, GridError>;
 
-    /// The last hierarchy built.
+    /// The last hierarchy built; `None` also where the builder keeps it on its device
+    /// ([`HierarchyBuilder::shape`] then describes it).
     fn grid(&self) -> Option<&LightingGrid>;
+
+    /// The shape of the last hierarchy built: that of [`HierarchyBuilder::grid`], or where
+    /// the builder keeps the grid on its device (for a frame whose later passes run there and
+    /// read it there), all the caller gets of it.
+    fn shape(&self) -> Option<GridShape> {
+        self.grid().map(LightingGrid::shape)
+    }
 
     /// Where the last hierarchy was built: `"cpu"`, or a backend's name (`"gpu"`).
     fn device(&self) -> &'static str {

@@ -32,8 +32,8 @@ use std::time::Instant;
 use glam::Vec3;
 use lgh_core::lighting_grid::representative::SLOTS;
 use lgh_core::lighting_grid::{
-    self, BuildTimings, Construction, GridBuilder, GridError, GridGeometry, HierarchyBuilder,
-    InputLights, LevelCount, LightingGrid, MAX_LEVELS,
+    self, BuildTimings, Construction, GridBuilder, GridError, GridGeometry, GridShape,
+    HierarchyBuilder, InputLights, LevelCount, LightingGrid, MAX_LEVELS,
 };
 
 use crate::batch::{Batch, PassTimes};
@@ -42,7 +42,10 @@ use crate::pool::Lease;
 
 mod draw;
 mod marks;
+mod number;
 mod transfer;
+
+pub use number::Numbered;
 
 use transfer::{unpack, upload_lights};
 
@@ -137,6 +140,10 @@ pub fn sources() -> Vec<(&'static str, String)> {
             with(&[include_str!("../shaders/grid/s1_keep.wgsl")]),
         ),
         (
+            "grid kept",
+            with(&[include_str!("../shaders/grid/kept.wgsl")]),
+        ),
+        (
             "grid draw",
             with(&[include_str!("../shaders/grid/draw.wgsl")]),
         ),
@@ -169,6 +176,9 @@ pub struct GridState {
     drawn: bool,
     /// Whether this builder has built (a recycled state's grids are an earlier builder's).
     built: bool,
+    /// The last build's shape where its grid stays on the GPU (not read back; `grid` is
+    /// then an earlier build's).
+    kept_shape: Option<GridShape>,
 }
 
 impl GridState {
@@ -181,6 +191,7 @@ impl GridState {
         self.drawn = false;
         self.on_cpu = false;
         self.built = false;
+        self.kept_shape = None;
         self
     }
 }
@@ -201,6 +212,9 @@ pub struct GpuGridBuilder<'c> {
     /// Whether the builds keep their representatives on the GPU instead of reading them
     /// back ([`GpuGridBuilder::keep_representatives`]).
     keep_slots: bool,
+    /// Whether the builds keep their grid on the GPU instead of reading it back
+    /// ([`GpuGridBuilder::keep_grid`]).
+    keep_grid: bool,
 }
 
 /// What the GPU holds of one build for the frame's later passes.
@@ -219,6 +233,9 @@ pub struct Held<'c> {
     pub records: Option<Lease<'c>>,
     /// The records of each level l = 1..=l_max (index l - 1), zero-intensity ones included.
     pub level_records: Vec<u32>,
+    /// The records numbered as the CPU keeps them, where they are kept (`None` also
+    /// without records).
+    pub numbered: Option<Numbered<'c>>,
 }
 
 /// States kept per context: one per frame building at once.
@@ -243,6 +260,7 @@ impl<'c> GpuGridBuilder<'c> {
             passes: PassTimes::new(),
             kept: Vec::new(),
             keep_slots: false,
+            keep_grid: false,
         }
     }
 
@@ -264,6 +282,15 @@ impl<'c> GpuGridBuilder<'c> {
     /// frame needs no copy of the representatives on the CPU.
     pub fn keep_representatives(&mut self, keep: bool) {
         self.keep_slots = keep;
+    }
+
+    /// Makes the next builds keep their grid on the GPU, where `keep`, as
+    /// [`GpuGridBuilder::keep_representatives`] does and without reading the grid back:
+    /// [`HierarchyBuilder::grid`] is then `None`, and [`HierarchyBuilder::shape`] (the level
+    /// ranges, read back instead) all the CPU gets of it. For a frame whose passes after the
+    /// build all run on the GPU, from what it holds ([`Held`]).
+    pub fn keep_grid(&mut self, keep: bool) {
+        self.keep_grid = keep;
     }
 }
 
@@ -308,7 +335,8 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
                 levels,
                 bounds: lighting_grid::shifted_bounds(lo, hi, state.cpu.shift()),
                 seed: state.seed,
-                keep_slots: self.keep_slots,
+                keep_slots: self.keep_slots || self.keep_grid,
+                keep_grid: self.keep_grid,
             };
             let run = Run {
                 lights,
@@ -364,8 +392,18 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
         let s = self.state.as_ref().filter(|s| s.built)?;
         if s.on_cpu {
             s.cpu.grid()
+        } else if s.kept_shape.is_some() {
+            None
         } else {
             s.grid.as_ref()
+        }
+    }
+
+    fn shape(&self) -> Option<GridShape> {
+        let s = self.state.as_ref().filter(|s| s.built)?;
+        match &s.kept_shape {
+            Some(shape) if !s.on_cpu => Some(shape.clone()),
+            _ => self.grid().map(LightingGrid::shape),
         }
     }
 }
@@ -377,8 +415,10 @@ struct Request {
     bounds: (Vec3, Vec3),
     /// The seed of the representatives' draw, if they are to be drawn.
     seed: Option<u64>,
-    /// Whether drawn representatives stay on the GPU (not read back).
+    /// Whether drawn representatives and the records stay on the GPU (not read back).
     keep_slots: bool,
+    /// Whether the grid is not read back (its level ranges are).
+    keep_grid: bool,
 }
 
 /// The lights of one build: on the CPU, and the same on the GPU if they are there already.
@@ -409,7 +449,9 @@ fn build_on<'c>(
         bounds: (lo, hi),
         seed,
         keep_slots,
+        keep_grid,
     } = *request;
+    state.kept_shape = None;
     state.drawn = false;
     let n = lights.positions.len();
     let top = GridGeometry::new(lo, hi, MAX_LEVELS);
@@ -605,7 +647,27 @@ fn build_on<'c>(
         )?),
         None => None,
     };
-    batch.read(records.buffer(), records.bytes())?;
+    let counts: Vec<usize> = (1..=l_max).map(|l| count_at(l_max - l)).collect();
+    let level_records: Vec<u32> = counts.iter().map(|&c| c as u32).collect();
+    let numbered = match vertices {
+        0 => None,
+        v if keep_slots => Some(number::number(ctx, &mut batch, &records, v as u32)?),
+        _ => None,
+    };
+    match &numbered {
+        Some(numbered) if keep_grid => {
+            let starts = number::level_starts(ctx, &mut batch, numbered, &level_records)?;
+            batch.read(starts.buffer(), starts.bytes())?;
+            batch.keep(starts);
+        }
+        _ if keep_grid => {
+            // No records: every level is empty.
+            let zeros = ctx.upload("grid level starts", &vec![0u32; level_records.len() + 1])?;
+            batch.read(zeros.buffer(), zeros.bytes())?;
+            batch.keep(zeros);
+        }
+        _ => batch.read(records.buffer(), records.bytes())?,
+    }
     if let Some(d) = &drawn {
         if !keep_slots {
             batch.read(d.slots.buffer(), d.slots.bytes())?;
@@ -622,29 +684,27 @@ fn build_on<'c>(
     t.push("gpu_build", start.elapsed().as_secs_f64() * 1e3);
     let start = Instant::now();
     let words: &[u32] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
-    let counts: Vec<usize> = (1..=l_max).map(|l| count_at(l_max - l)).collect();
-    let grid = state
-        .grid
-        .get_or_insert_with(|| GridBuilder::default().into_grid());
-    unpack(
-        GridGeometry::new(lo, hi, l_max),
-        &counts,
-        words,
-        lights.normals.is_some(),
-        grid,
-    );
-    let level_records = if keep_slots {
-        counts.iter().map(|&c| c as u32).collect()
+    let geometry = GridGeometry::new(lo, hi, l_max);
+    if keep_grid {
+        let mut level_start = vec![0u32];
+        level_start.extend(words.iter().skip(1).take(level_records.len()));
+        state.kept_shape = Some(GridShape {
+            geometry,
+            level_start,
+        });
     } else {
-        Vec::new()
-    };
+        let grid = state
+            .grid
+            .get_or_insert_with(|| GridBuilder::default().into_grid());
+        unpack(geometry, &counts, words, lights.normals.is_some(), grid);
+    }
     let mut slots = None;
     match drawn {
         Some(d) if keep_slots && reads.len() == 2 => {
             slots = draw::drew(&reads[1]).then_some(d.slots);
         }
         Some(_) if reads.len() == 3 => {
-            let kept = grid.level_range(1).len();
+            let kept = state.grid.as_ref().map_or(0, |g| g.level_range(1).len());
             state.drawn = draw::unpack_draw(&reads[1], &reads[2], kept, &mut state.reps);
         }
         _ => {}
@@ -654,7 +714,12 @@ fn build_on<'c>(
         lights: up,
         slots,
         records: keep_slots.then_some(records),
-        level_records,
+        level_records: if keep_slots {
+            level_records
+        } else {
+            Vec::new()
+        },
+        numbered,
     })
 }
 

@@ -25,7 +25,7 @@ enum Part<'c> {
 /// hierarchy) and of the VPLs they index ([`LIGHT_BYTES`] a VPL: position, flux, normal, the
 /// build's layout), from what the GPU holds of each hierarchy (`held`, in hierarchy order)
 /// or from the tables `t`. The copies are recorded in `batch`, which keeps what they read and
-/// the builds' records (which the lookups read, [`super::lookups`]).
+/// the builds' records and their numbers (which the lookups read, [`super::lookups`]).
 ///
 /// # Errors
 /// `held` does not match the hierarchies, a hierarchy's part is neither held nor in the
@@ -63,12 +63,18 @@ pub(super) fn join<'c>(
                 lights,
                 slots,
                 records,
+                numbered,
                 ..
             }) => {
-                // The lookups read the records in this batch ([`super::lookups`]): a lease
-                // dropped before its batch ran may be leased by another frame.
+                // The lookups read the records and their numbers in this batch
+                // ([`super::lookups`]): a lease dropped before its batch ran may be leased
+                // by another frame.
                 if let Some(records) = records {
                     batch.keep(records);
+                }
+                if let Some(n) = numbered {
+                    batch.keep(n.index);
+                    batch.keep(n.total);
                 }
                 (Some(lights), slots)
             }

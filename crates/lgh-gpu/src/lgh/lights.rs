@@ -52,13 +52,12 @@ struct LightParams {
     start: [[u32; 4]; LEVELS],
 }
 
-/// The WGSL sources of the three kernels: flags, grid rows, VPL rows.
+/// The WGSL sources of the two kernels: grid rows, VPL rows.
 #[must_use]
-pub fn sources() -> [String; 3] {
+pub fn sources() -> [String; 2] {
     let common = include_str!("../shaders/lights/common.wgsl");
     let write = include_str!("../shaders/lights/write.wgsl");
     [
-        crate::kernel(&[common, include_str!("../shaders/lights/flags.wgsl")]),
         crate::kernel(&[common, write, include_str!("../shaders/lights/rows.wgsl")]),
         crate::kernel(&[
             common,
@@ -75,61 +74,6 @@ pub(super) struct GpuLights<'c> {
     /// The binning's spheres (centre, finite radius) and sub-images with flags.
     pub spheres: Lease<'c>,
     pub flags: Lease<'c>,
-    /// Per hierarchy, its records numbered ([`number`]; `None` without records).
-    pub numbered: Vec<Option<Numbered<'c>>>,
-}
-
-/// A build's records numbered as the CPU keeps them: each record's grid index (kept
-/// records before it), and the count of kept records.
-pub(crate) struct Numbered<'c> {
-    pub index: Lease<'c>,
-    pub total: Lease<'c>,
-}
-
-/// Records into `batch` the numbering of the first `count` (> 0) of a build's `records`:
-/// a flag per record (a positive intensity: the CPU drops the others as it unpacks the
-/// grid), and its exclusive [`scan`](crate::scan).
-///
-/// # Errors
-/// A buffer cannot be had, or the dispatch or scan is too large.
-pub(super) fn number<'c>(
-    ctx: &'c GpuContext,
-    batch: &mut Batch<'c>,
-    records: &Lease<'c>,
-    count: u32,
-) -> Result<Numbered<'c>, GpuError> {
-    let params = LightParams {
-        count,
-        ..LightParams::default()
-    };
-    let uniform = ctx.uniform("light params", &params);
-    let kept = ctx.output("light kept", 4 * u64::from(count))?;
-    let out = Numbered {
-        index: ctx.output("light index", 4 * u64::from(count))?,
-        total: ctx.output("light total", 16)?,
-    };
-    let [flags_src, _, _] = sources();
-    let pipeline = ctx.pipeline("lights flags", || flags_src);
-    let bind = ctx.bind_group(
-        &pipeline,
-        vec![
-            uniform.as_entire_binding(),
-            records.binding(),
-            kept.binding(),
-        ],
-    );
-    batch.dispatch("light_table", &pipeline, &bind, count as usize)?;
-    crate::scan::record(
-        ctx,
-        batch,
-        &kept,
-        &out.index,
-        &out.total,
-        count as usize,
-        false,
-    )?;
-    batch.keep(kept);
-    Ok(out)
 }
 
 /// Records into `batch` the making of the `lights` shaded lights of the frame (`inputs`,
@@ -156,16 +100,14 @@ pub(super) fn record<'c>(
         return Ok(None);
     }
     let n2 = t.n.max(1) * t.n.max(1);
-    let mut out = GpuLights {
+    let out = GpuLights {
         table: ctx.output("lights", 64 * lights as u64)?,
         spheres: ctx.output("bin spheres", 16 * lights as u64)?,
         flags: ctx.output("bin flags", 4 * lights as u64)?,
-        numbered: Vec::new(),
     };
-    let [_, rows_src, vpl_src] = sources();
+    let [rows_src, vpl_src] = sources();
     for (h, held) in t.hierarchies.iter().zip(held.iter().flatten()) {
         let Some(records) = &held.records else {
-            out.numbered.push(None);
             continue;
         };
         let grid = h.grid;
@@ -223,12 +165,10 @@ pub(super) fn record<'c>(
             );
             batch.dispatch("light_table", &pipeline, &bind, params.count as usize)?;
         }
-        if at == 0 {
-            out.numbered.push(None);
+        let (true, Some(numbers)) = (at > 0, &held.numbered) else {
             continue;
-        }
+        };
         let uniform = ctx.uniform("light params", &base);
-        let numbers = number(ctx, batch, records, at)?;
         let pipeline = ctx.pipeline("lights rows", || rows_src.clone());
         let bind = ctx.bind_group(
             &pipeline,
@@ -242,7 +182,6 @@ pub(super) fn record<'c>(
             ],
         );
         batch.dispatch("light_table", &pipeline, &bind, at as usize)?;
-        out.numbered.push(Some(numbers));
     }
     Ok(Some(out))
 }

@@ -8,8 +8,7 @@
 //! of the loop's words ([`super::upload::Tables`]), so that the grid's lookups are neither
 //! made on the CPU nor uploaded.
 //!
-//! Per hierarchy, after the records are numbered (the shaded lights' flags and scan,
-//! [`super::lights::number`]):
+//! Per hierarchy, from its records as the build numbered them ([`crate::grid::Numbered`]):
 //! 1. `rows`: one invocation per row entry, a binary search of its level's records by row
 //!    (the first record of the row is kept for the next passes);
 //! 2. `count`: one invocation per record, its children (at most 27) found as the CPU finds
@@ -27,7 +26,6 @@
 
 use lgh_render::methods::lgh::tables::{GridTables, LghTables};
 
-use super::lights::{Numbered, number};
 use super::upload::Tables;
 use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
@@ -84,8 +82,7 @@ pub(super) fn row_entries(l_max: u32) -> usize {
 
 /// Records into `batch` the making of the lookup tables of every hierarchy of `t` whose
 /// CPU did not make them, into `words` at the places `packed` gives them, from the records
-/// its build holds (`held`, in hierarchy order), numbered already where `numbered` says so
-/// (the shaded lights' making numbered them in an earlier submission).
+/// its build holds and numbered (`held`, in hierarchy order).
 ///
 /// # Errors
 /// Such a hierarchy's records are not held, or a buffer, dispatch or scan cannot be had.
@@ -95,7 +92,6 @@ pub(super) fn record<'c>(
     t: &LghTables,
     packed: &Tables,
     held: &[Option<Held<'c>>],
-    mut numbered: Vec<Option<Numbered<'c>>>,
     words: &Lease<'c>,
 ) -> Result<(), GpuError> {
     let [rows_src, count_src, fill_src] = sources();
@@ -107,6 +103,7 @@ pub(super) fn record<'c>(
         let Some(Some(Held {
             records: Some(records),
             level_records,
+            numbered,
             ..
         })) = held.get(i)
         else {
@@ -148,9 +145,10 @@ pub(super) fn record<'c>(
             batch.keep(zeros);
             continue;
         }
-        let numbers = match numbered.get_mut(i).and_then(Option::take) {
-            Some(n) => n,
-            None => number(ctx, batch, records, at)?,
+        let Some(numbers) = numbered else {
+            return Err(GpuError::Failed(
+                "lgh on the GPU: a hierarchy's records are not numbered".into(),
+            ));
         };
         let uniform = ctx.uniform("lookup params", &params);
         let common = (&uniform, records, &numbers.index);
@@ -179,15 +177,7 @@ pub(super) fn record<'c>(
             bindings(common, &[&counts, &scratch, &offsets, words]),
         );
         batch.dispatch("lookups", &pipeline, &bind, at as usize)?;
-        for lease in [
-            counts,
-            offsets,
-            children,
-            scratch,
-            row_records,
-            numbers.index,
-            numbers.total,
-        ] {
+        for lease in [counts, offsets, children, scratch, row_records] {
             batch.keep(lease);
         }
     }
@@ -239,7 +229,7 @@ mod tests {
         let packed = Tables::new(&t, false).expect("packed");
         let mut batch = Batch::new(ctx);
         let all = packed.words(ctx, &mut batch, &t).expect("words");
-        record(ctx, &mut batch, &t, &packed, &held, Vec::new(), &all).expect("record");
+        record(ctx, &mut batch, &t, &packed, &held, &all).expect("record");
         batch.read(all.buffer(), all.bytes()).expect("read");
         let (reads, _) = batch.finish().expect("gpu");
         let read: &[u32] = bytemuck::cast_slice(&reads[0]);

@@ -113,9 +113,9 @@ impl IndirectMethod for GpuLgh {
             lights::record(ctx, &mut first, inputs, &t, &hierarchies, t.lights.len())
                 .map_err(fail)?
         };
-        let (mut table, spheres, mut numbered) = match made {
-            Some(l) => (Some(l.table), Some((l.spheres, l.flags)), l.numbered),
-            None => (None, None, Vec::new()),
+        let (mut table, spheres) = match made {
+            Some(l) => (Some(l.table), Some((l.spheres, l.flags))),
+            None => (None, None),
         };
         // The tile binning on the GPU; lists larger than its buffers on the CPU (and the
         // table, whose making may not have been submitted, packed on the CPU).
@@ -126,7 +126,6 @@ impl IndirectMethod for GpuLgh {
             Err(GpuError::TooLarge(_)) => {
                 frame.bin_on_cpu(inputs, memory);
                 table = None;
-                numbered = Vec::new();
                 None
             }
             Err(e) => return Err(fail(e)),
@@ -137,7 +136,6 @@ impl IndirectMethod for GpuLgh {
             bins,
             hierarchies,
             lights: table,
-            numbered,
             before: Vec::new(),
         };
         if crate::ratio::supported(&filter) {
@@ -214,9 +212,6 @@ pub(super) struct OnGpu<'c> {
     pub hierarchies: Vec<Option<crate::grid::Held<'c>>>,
     /// The shaded lights' table, where the GPU made it ([`lights::record`]).
     pub lights: Option<Lease<'c>>,
-    /// Per hierarchy, its build's records numbered where the shaded lights were made
-    /// (else empty: [`lookups::record`] numbers them).
-    pub numbered: Vec<Option<lights::Numbered<'c>>>,
     /// Submissions before the loop's, by name, with their wall times in milliseconds.
     pub before: Vec<(&'static str, f64)>,
 }
@@ -248,7 +243,6 @@ pub(super) fn record_loop<'c>(
         bins,
         hierarchies,
         lights,
-        numbered,
         mut before,
     } = held;
     let start = Instant::now();
@@ -279,15 +273,7 @@ pub(super) fn record_loop<'c>(
     let params = ctx.uniform("lgh params", &params);
     let gbuffer = ctx.gbuffer(g)?;
     let words = packed.words(ctx, &mut batch, tables)?;
-    lookups::record(
-        ctx,
-        &mut batch,
-        tables,
-        &packed,
-        &hierarchies,
-        numbered,
-        &words,
-    )?;
+    lookups::record(ctx, &mut batch, tables, &packed, &hierarchies, &words)?;
     let (slots, reps) = held::join(ctx, &mut batch, tables, hierarchies)?;
     let lights = match lights {
         Some(table) => table,
