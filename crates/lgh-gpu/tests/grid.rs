@@ -371,7 +371,7 @@ fn bad_lights_are_refused_as_on_the_cpu() {
 
 /// An `lgh` frame's statistics say where its hierarchies were built: on the GPU with the
 /// GPU methods (shadowed, whose build also draws the representatives, and unshadowed), on
-/// the CPU with the CPU method.
+/// the CPU with the CPU method; and whether the CPU held the grids.
 #[test]
 #[cfg_attr(
     not(gpu_adapter),
@@ -392,10 +392,12 @@ fn lgh_statistics_say_where_the_hierarchy_was_built() {
         vpls: 2000,
         ..RenderSettings::default()
     };
-    for (method, want) in [
-        (lgh_gpu::lgh::LGH_GPU, "gpu"),
-        (lgh_gpu::lgh::LGH_UNSHADOWED_GPU, "gpu"),
-        (LGH, "cpu"),
+    // The shadowed GPU frame keeps its grids on the GPU; without shadows the CPU packs
+    // the shaded lights from the grids read back.
+    for (method, want, on_cpu) in [
+        (lgh_gpu::lgh::LGH_GPU, "gpu", false),
+        (lgh_gpu::lgh::LGH_UNSHADOWED_GPU, "gpu", true),
+        (LGH, "cpu", true),
     ] {
         let s = RenderSettings {
             method,
@@ -404,5 +406,39 @@ fn lgh_statistics_say_where_the_hierarchy_was_built() {
         let frame = render_frame(&world, &s, &Silent).expect("frame");
         let stats = frame.stats::<LghStats>().expect("lgh statistics");
         assert_eq!(stats.hierarchy_device, want, "{}", method.name());
+        assert_eq!(stats.grids_on_cpu, on_cpu, "{}", method.name());
+    }
+}
+
+/// A build that keeps its grid on the GPU hands back no grid, and its shape (the level
+/// ranges, read back instead) is that of the same build read back: on lights on surfaces,
+/// in a box with dark lights (dropped records), and one light.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn a_grid_kept_on_the_gpu_has_the_read_back_grids_shape() {
+    let ctx = GpuContext::shared().expect("an adapter");
+    let cases = [
+        surfaces(20_000, 3),
+        in_box(5_000, 4, Vec3::ONE, Vec3::ZERO),
+        in_box(1, 5, Vec3::ONE, Vec3::ZERO),
+    ];
+    for (i, l) in cases.iter().enumerate() {
+        let read = gpu(ctx, l, LevelCount::Auto, None);
+        let mut b = GpuGridBuilder::new(ctx);
+        b.keep_grid(true);
+        HierarchyBuilder::build(&mut b, &l.input(), LevelCount::Auto, Construction::Restrict)
+            .expect("gpu build");
+        assert_eq!(b.fallback, None, "case {i}: the build fell back to the CPU");
+        assert!(
+            HierarchyBuilder::grid(&b).is_none(),
+            "case {i}: a grid came back"
+        );
+        assert_eq!(HierarchyBuilder::shape(&b), Some(read.shape()), "case {i}");
+        assert!(HierarchyBuilder::makes_lookups(&b), "case {i}");
+        let held = b.take_held();
+        assert!(matches!(held.as_slice(), [Some(h)] if h.numbered.is_some()));
     }
 }

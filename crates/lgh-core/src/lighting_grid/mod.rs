@@ -153,6 +153,10 @@ pub enum GridError {
         /// Index of the first bad light.
         index: usize,
     },
+    /// The builder kept a grid on its device ([`HierarchyBuilder::shape`]) for a frame
+    /// that needs it on the CPU, or built some of a frame's grids there and some not.
+    #[error("the hierarchy builder kept a grid on its device, but this frame needs it on the CPU")]
+    KeptOnDevice,
 }
 
 /// A built hierarchy: levels 1..=l_max merged into one struct-of-arrays buffer.

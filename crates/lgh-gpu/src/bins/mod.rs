@@ -190,7 +190,7 @@ pub fn record<'c>(
     let too_large = |what: &str| GpuError::TooLarge(format!("tile binning: {what}"));
     let lists = u64::from(n * n) * u64::from(tiles_x) * u64::from(tiles_y);
     let lists = u32::try_from(lists).map_err(|_| too_large("lists"))?;
-    let lights = u32::try_from(spheres.centres.len()).map_err(|_| too_large("lights"))?;
+    let lights = u32::try_from(spheres.count).map_err(|_| too_large("lights"))?;
     let mut params = BinParams {
         width: g.width,
         height: g.height,
@@ -208,6 +208,11 @@ pub fn record<'c>(
     let cam = ctx.uniform("bin camera", &GpuCamera::new(camera, g.width, g.height));
     let (sphere_buf, flag_buf) = match on_gpu {
         Some(made) => made,
+        None if spheres.centres.len() != spheres.count => {
+            return Err(GpuError::Failed(
+                "tile binning: the lights are on the GPU, but their spheres were not made".into(),
+            ));
+        }
         None => {
             let (packed, flags) = pack_spheres(spheres);
             (

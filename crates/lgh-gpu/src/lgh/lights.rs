@@ -217,7 +217,7 @@ mod tests {
             .lights;
         let (cpu_spheres, cpu_flags) = crate::bins::pack_spheres(&frame.spheres());
         let mut batch = Batch::new(ctx);
-        let made = record(ctx, &mut batch, &inputs, &t, &held, t.lights.len())
+        let made = record(ctx, &mut batch, &inputs, &t, &held, t.light_count)
             .expect("record")
             .expect("made on the GPU");
         batch

@@ -21,6 +21,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::{Vec3, Vec4};
+use lgh_core::lighting_grid::GridError;
 use lgh_core::timing::Timings;
 use lgh_render::denoise::atrous::AtrousParams;
 use lgh_render::memory::FrameMemory;
@@ -92,61 +93,114 @@ impl IndirectMethod for GpuLgh {
         }
         let fail = |e: GpuError| RenderError::Backend(e.to_string());
         let ctx = GpuContext::shared().map_err(fail)?;
-        // The hierarchies built on the GPU (the gather construction on the CPU).
-        // Their representatives and the VPLs these index stay on the GPU for the loop.
-        let mut builder = crate::grid::GpuGridBuilder::new(ctx);
-        builder.keep_representatives(true);
-        let prepared = LghFrame::prepare_with(inputs, shadowed, memory, true, Some(&mut builder))
-            .map_err(|e| RenderError::Backend(e.to_string()))?;
-        let hierarchies = builder.take_held();
-        drop(builder);
-        let mut frame = match prepared {
-            Prepared::Dark(output) => return Ok(output),
-            Prepared::Frame(frame) => frame,
-        };
-        let g = inputs.gbuffer;
-        // The shaded lights' table and spheres made on the GPU from what the builds hold
-        // (else packed on the CPU), in the tile binning's first submission.
-        let mut first = Batch::new(ctx);
-        let made = {
-            let t = frame.tables(g.width, g.height).ok_or_else(missing_tables)?;
-            lights::record(ctx, &mut first, inputs, &t, &hierarchies, t.lights.len())
-                .map_err(fail)?
-        };
-        let (mut table, spheres) = match made {
-            Some(l) => (Some(l.table), Some((l.spheres, l.flags))),
-            None => (None, None),
-        };
-        // The tile binning on the GPU; lists larger than its buffers on the CPU (and the
-        // table, whose making may not have been submitted, packed on the CPU).
-        let gbuffer = ctx.gbuffer(g).map_err(fail)?;
-        let sp = frame.spheres();
-        let bins = match crate::bins::record(ctx, first, g, inputs.camera, &gbuffer, &sp, spheres) {
-            Ok(bins) => Some(bins),
-            Err(GpuError::TooLarge(_)) => {
-                frame.bin_on_cpu(inputs, memory);
-                table = None;
-                None
+        // With shadow samples every step after the build runs on the GPU from what the
+        // builds hold, and the grids stay there; where a step cannot (a grid built on the
+        // CPU beside ones on the GPU, lists too long for the GPU's binning), the frame is
+        // made again with the grids read back.
+        let s = inputs.settings;
+        let resident =
+            s.shadows.k(shadowed, DEFAULT_SHADOW_SAMPLES) > 0 && s.lgh.only_level.is_none();
+        if resident {
+            match frame(ctx, inputs, memory, shadowed, true) {
+                Err(Attempt::Again) => {}
+                Err(Attempt::Failed(e)) => return Err(e),
+                Ok(output) => return Ok(output),
             }
-            Err(e) => return Err(fail(e)),
-        };
-        let tables = frame.tables(g.width, g.height).ok_or_else(missing_tables)?;
-        let filter = frame.ratio_filter(inputs);
-        let held = OnGpu {
-            bins,
-            hierarchies,
-            lights: table,
-            before: Vec::new(),
-        };
-        if crate::ratio::supported(&filter) {
-            // The loop, the blur and the ratio estimator in one submission.
-            let (shadowed, overdraw, timings) =
-                chain::shade(ctx, inputs, &tables, held, &filter).map_err(fail)?;
-            return Ok(frame.finish_shadowed(inputs, shadowed, overdraw, timings));
         }
-        let shaded = lighting_loop(ctx, inputs, &tables, held).map_err(fail)?;
-        Ok(frame.finish_with(inputs, shaded, memory, Some(gpu_atrous)))
+        match frame(ctx, inputs, memory, shadowed, false) {
+            Ok(output) => Ok(output),
+            Err(Attempt::Failed(e)) => Err(e),
+            Err(Attempt::Again) => Err(RenderError::Backend(
+                "lgh on the GPU: the hierarchies' grids are not on the CPU".into(),
+            )),
+        }
     }
+}
+
+/// Why a GPU lgh frame did not come out.
+enum Attempt {
+    /// It needs its grids on the CPU: make it again with them read back.
+    Again,
+    /// It failed.
+    Failed(RenderError),
+}
+
+impl From<RenderError> for Attempt {
+    fn from(e: RenderError) -> Self {
+        Self::Failed(e)
+    }
+}
+
+/// The frame of `inputs` with its lighting loop on the GPU, its grids kept on the GPU
+/// where `resident` (else read back: the CPU then makes what the GPU cannot).
+fn frame(
+    ctx: &GpuContext,
+    inputs: &MethodInputs,
+    memory: &mut FrameMemory,
+    shadowed: bool,
+    resident: bool,
+) -> Result<MethodOutput, Attempt> {
+    let fail = |e: GpuError| RenderError::Backend(e.to_string());
+    // The hierarchies built on the GPU (the gather construction on the CPU).
+    // Their representatives and the VPLs these index stay on the GPU for the loop.
+    let mut builder = crate::grid::GpuGridBuilder::new(ctx);
+    builder.keep_representatives(true);
+    builder.keep_grid(resident);
+    let prepared = match LghFrame::prepare_with(inputs, shadowed, memory, true, Some(&mut builder))
+    {
+        Ok(p) => p,
+        Err(GridError::KeptOnDevice) => return Err(Attempt::Again),
+        Err(e) => return Err(RenderError::Backend(e.to_string()).into()),
+    };
+    let hierarchies = builder.take_held();
+    drop(builder);
+    let mut frame = match prepared {
+        Prepared::Dark(output) => return Ok(output),
+        Prepared::Frame(frame) => frame,
+    };
+    let g = inputs.gbuffer;
+    // The shaded lights' table and spheres made on the GPU from what the builds hold
+    // (else packed on the CPU), in the tile binning's first submission.
+    let mut first = Batch::new(ctx);
+    let made = {
+        let t = frame.tables(g.width, g.height).ok_or_else(missing_tables)?;
+        lights::record(ctx, &mut first, inputs, &t, &hierarchies, t.light_count).map_err(fail)?
+    };
+    let (mut table, spheres) = match made {
+        Some(l) => (Some(l.table), Some((l.spheres, l.flags))),
+        None if !frame.lights_on_cpu() => return Err(Attempt::Again),
+        None => (None, None),
+    };
+    // The tile binning on the GPU; lists larger than its buffers on the CPU (and the
+    // table, whose making may not have been submitted, packed on the CPU).
+    let gbuffer = ctx.gbuffer(g).map_err(fail)?;
+    let sp = frame.spheres();
+    let bins = match crate::bins::record(ctx, first, g, inputs.camera, &gbuffer, &sp, spheres) {
+        Ok(bins) => Some(bins),
+        Err(GpuError::TooLarge(_)) if !frame.lights_on_cpu() => return Err(Attempt::Again),
+        Err(GpuError::TooLarge(_)) => {
+            frame.bin_on_cpu(inputs, memory);
+            table = None;
+            None
+        }
+        Err(e) => return Err(fail(e).into()),
+    };
+    let tables = frame.tables(g.width, g.height).ok_or_else(missing_tables)?;
+    let filter = frame.ratio_filter(inputs);
+    let held = OnGpu {
+        bins,
+        hierarchies,
+        lights: table,
+        before: Vec::new(),
+    };
+    if crate::ratio::supported(&filter) {
+        // The loop, the blur and the ratio estimator in one submission.
+        let (shadowed, overdraw, timings) =
+            chain::shade(ctx, inputs, &tables, held, &filter).map_err(fail)?;
+        return Ok(frame.finish_shadowed(inputs, shadowed, overdraw, timings));
+    }
+    let shaded = lighting_loop(ctx, inputs, &tables, held).map_err(fail)?;
+    Ok(frame.finish_with(inputs, shaded, memory, Some(gpu_atrous)))
 }
 
 /// The error of a frame prepared without the loop's tables.
@@ -377,4 +431,62 @@ fn lighting_loop<'c>(
         },
         timings: gpu_timings(&gpu, start, upload_ms, 0.0, &before),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::GpuGridBuilder;
+    use crate::lgh::testing::{FrameInputs, cornell};
+    use lgh_render::RenderSettings;
+
+    /// A frame prepared from grids kept on the GPU holds no shaded light on the CPU where
+    /// every later step runs on the GPU (the unbiased estimate's shadow samples), and is
+    /// refused where a step needs them on the CPU (no shadow samples: the CPU packs the
+    /// lights; one level shown alone), which the GPU frame answers by building again with
+    /// the grids read back.
+    #[test]
+    #[cfg_attr(
+        not(gpu_adapter),
+        ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+    )]
+    fn grids_stay_on_the_gpu_only_for_frames_that_run_there() {
+        let world = cornell();
+        for (shadowed, only_level, resident) in [
+            (true, None, true),
+            (false, None, false),
+            (true, Some(2), false),
+        ] {
+            let mut s = RenderSettings {
+                width: 32,
+                height: 18,
+                vpls: 2000,
+                ..RenderSettings::default()
+            };
+            s.lgh.only_level = only_level;
+            let made = FrameInputs::new(&world, &s);
+            let inputs = made.inputs(&world, &s);
+            let ctx = GpuContext::shared().expect("an adapter");
+            let mut builder = GpuGridBuilder::new(ctx);
+            builder.keep_representatives(true);
+            builder.keep_grid(true);
+            let mut memory = FrameMemory::default();
+            let prepared =
+                LghFrame::prepare_with(&inputs, shadowed, &mut memory, true, Some(&mut builder));
+            match prepared {
+                Ok(Prepared::Frame(frame)) => {
+                    assert!(resident, "{shadowed} {only_level:?}: prepared");
+                    assert!(!frame.lights_on_cpu());
+                    let t = frame.tables(s.width, s.height).expect("tables");
+                    assert!(t.lights.is_empty() && t.light_count > 1000);
+                    assert!(t.hierarchies.iter().all(|h| h.grid.lookups_on_device));
+                }
+                Err(e) => {
+                    assert!(!resident, "{shadowed} {only_level:?}: {e}");
+                    assert_eq!(e, GridError::KeptOnDevice);
+                }
+                Ok(Prepared::Dark(_)) => panic!("a dark frame"),
+            }
+        }
+    }
 }

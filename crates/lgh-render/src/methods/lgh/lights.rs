@@ -4,19 +4,19 @@
 
 use glam::Vec3;
 use lgh_core::blending::LevelRole;
-use lgh_core::color::luminance;
 use lgh_core::lighting_grid::descent::Descent;
 use lgh_core::lighting_grid::lookup::{VertexLookup, VertexRows};
 use lgh_core::lighting_grid::partition::{Partition, ShadedLevels};
-use lgh_core::lighting_grid::representative::{NONE, SLOTS, representatives, s1_representatives};
-use lgh_core::lighting_grid::{Construction, LightingGrid};
+use lgh_core::lighting_grid::representative::{SLOTS, representatives, s1_representatives};
+use lgh_core::lighting_grid::{Construction, GridError, GridShape, LightingGrid};
 use lgh_core::reservoir::Reservoir;
 use lgh_core::rng::Rng;
 use lgh_core::vpl::{GridEmission, Vpls, light_irradiance};
 use rayon::prelude::*;
 
 use crate::methods::lgh::light_batch::PackedLight;
-use crate::methods::lgh::tables::GridTables;
+use crate::methods::lgh::rep_set::{RepSet, chroma, relative_colour, representative_weight};
+use crate::methods::lgh::tables::{DeviceKeeps, GridTables};
 use crate::passes::gbuffer::GBuffer;
 use crate::shading::reservoirs::{ShadowReservoirs, ShadowSample};
 use crate::shading::shadow_pass::Targets;
@@ -60,21 +60,9 @@ pub(super) struct ShadeLights {
     reps: Vec<RepSet>,
     /// What the unbiased estimate needs of each hierarchy (empty for the paper's).
     pub(super) hierarchies: Vec<Hierarchy>,
-}
-
-/// What a hierarchy builder's device keeps of its last build for a frame whose loop runs
-/// there ([`lgh_core::lighting_grid::HierarchyBuilder::keeps_lights`],
-/// [`keeps_representatives`](lgh_core::lighting_grid::HierarchyBuilder::keeps_representatives),
-/// [`makes_lookups`](lgh_core::lighting_grid::HierarchyBuilder::makes_lookups)): the CPU
-/// does not make these.
-#[derive(Clone, Copy, Debug, Default)]
-pub(super) struct DeviceKeeps {
-    /// The build's input lights (the VPLs the representatives index).
-    pub lights: bool,
-    /// The S_1 lights' representatives.
-    pub representatives: bool,
-    /// The vertex rows and the descent's children.
-    pub lookups: bool,
+    /// The lights a builder's device holds and makes the loop's rows of itself (none of
+    /// them in the arrays above, which are then empty: [`ShadeLights::add_on_device`]).
+    on_device: usize,
 }
 
 /// One hierarchy as the unbiased estimate reads it (docs/design.md, "Unbiased estimate"):
@@ -96,82 +84,35 @@ pub(super) struct Hierarchy {
     pub(super) tables: Option<GridTables>,
 }
 
-/// The [`SLOTS`] representative VPLs of one light, structure of arrays (positions, normals
-/// and flux colours per axis), so that weighing all of them for a pixel is a few vector
-/// operations on adjacent cache lines. A zero normal marks an empty slot. The colour of
-/// each VPL's flux ([`chroma`]) is kept here so that the unbiased estimate's gain needs no
-/// read of the VPL itself: a pass that draws targets for pixel after pixel waits on memory
-/// for each such read, and those lines sit next to the ones the weights have just read.
-#[derive(Clone, Copy, Debug, Default)]
-#[repr(align(64))]
-struct RepSet {
-    position: [[f32; SLOTS]; 3],
-    normal: [[f32; SLOTS]; 3],
-    colour: [[f32; SLOTS]; 3],
-}
-
-impl RepSet {
-    /// Slot `s`: position and normal.
-    fn get(&self, s: usize) -> (Vec3, Vec3) {
-        let [px, py, pz] = self.position;
-        let [nx, ny, nz] = self.normal;
-        (
-            Vec3::new(px[s], py[s], pz[s]),
-            Vec3::new(nx[s], ny[s], nz[s]),
-        )
-    }
-
-    /// The flux colour of slot `s`.
-    fn colour(&self, s: usize) -> Vec3 {
-        let [r, g, b] = &self.colour;
-        Vec3::new(r[s], g[s], b[s])
-    }
-
-    /// Sets slot `s` to a VPL at `p` with normal `n` and flux `flux`.
-    fn set(&mut self, s: usize, p: Vec3, n: Vec3, flux: Vec3) {
-        let colour = chroma(flux);
-        for a in 0..3 {
-            self.position[a][s] = p[a];
-            self.normal[a][s] = n[a];
-            self.colour[a][s] = colour[a];
-        }
-    }
-
-    /// The representatives `slots` (VPL indices, [`NONE`] for an empty slot) of `vpls`.
-    fn of(slots: &[u32], vpls: &Vpls) -> Self {
-        let mut set = Self::default();
-        for (s, &r) in slots.iter().enumerate() {
-            if r != NONE {
-                let r = r as usize;
-                set.set(s, vpls.positions[r], vpls.normals[r], vpls.flux[r]);
-            }
-        }
-        set
-    }
-
-    /// [`representative_weight`] of every slot for the pixel at `x` with normal `n_x`.
-    #[inline]
-    fn weights(&self, x: Vec3, n_x: Vec3, eps2: f32) -> [f32; SLOTS] {
-        let [px, py, pz] = &self.position;
-        let [nx, ny, nz] = &self.normal;
-        // A plain loop over the lanes, not `array::from_fn`: in some builds its closure was
-        // compiled as an out-of-line call (docs/performance.md, "Shadow targets").
-        let mut w = [0.0; SLOTS];
-        for (s, w) in w.iter_mut().enumerate() {
-            *w = representative_weight(
-                x,
-                n_x,
-                Vec3::new(px[s], py[s], pz[s]),
-                Vec3::new(nx[s], ny[s], nz[s]),
-                eps2,
-            );
-        }
-        w
-    }
-}
-
 impl ShadeLights {
+    /// The number of shaded lights.
+    pub(super) fn len(&self) -> usize {
+        self.position.len() + self.on_device
+    }
+
+    /// Counts the lights of a hierarchy of shape `shape` built from `vpls` VPLs, shaded from
+    /// level `lowest` (0: the VPLs too), whose builder keeps it on its device and makes the
+    /// loop's rows there: none is added to the arrays.
+    ///
+    /// # Errors
+    /// Lights of a hierarchy the CPU holds are here already (the indices would not match).
+    pub(super) fn add_on_device(
+        &mut self,
+        shape: &GridShape,
+        vpls: usize,
+        lowest: u32,
+    ) -> Result<(), GridError> {
+        if !self.position.is_empty() {
+            return Err(GridError::KeptOnDevice);
+        }
+        self.on_device += shape.len() + if lowest == 0 { vpls } else { 0 };
+        Ok(())
+    }
+
     /// Adds levels `lowest..=l_max` of `grid` (level 0 = the VPLs `vpls` it was built from).
+    ///
+    /// # Errors
+    /// Lights a builder's device holds are here already (the indices would not match).
     pub(super) fn add_hierarchy(
         &mut self,
         grid: &LightingGrid,
@@ -180,7 +121,10 @@ impl ShadeLights {
         alpha: f32,
         emission: GridEmission,
         n2: usize,
-    ) {
+    ) -> Result<(), GridError> {
+        if self.on_device > 0 {
+            return Err(GridError::KeptOnDevice);
+        }
         let geom = grid.geometry;
         let l_max = geom.l_max;
         for l in lowest..=l_max {
@@ -214,6 +158,7 @@ impl ShadeLights {
             self.reach
                 .extend(std::iter::repeat_n(role.reach(radius), p.len()));
         }
+        Ok(())
     }
 
     /// Leaves only the lights of level `level` in view: the others get a negative reach,
@@ -260,14 +205,16 @@ impl ShadeLights {
     }
 
     /// Keeps what the unbiased estimate needs of `grid` (built from `vpls` by restriction or
-    /// all-scatter), whose lights [`ShadeLights::add_hierarchy`] added from
-    /// index `first` with levels `levels`: the representatives of its S_1 lights (drawn with
-    /// `seed`, or `drawn` already where the builder drew them), the children of its coarser
-    /// lights and its centroids by vertex. With `tables`, what the builder's device keeps
-    /// (`keeps`) is not made: a copy of the VPLs, the representatives, the lookups.
+    /// all-scatter; `None` where its builder keeps it on its device, of shape `shape`),
+    /// whose lights [`ShadeLights::add_hierarchy`] added from index `first` with levels
+    /// `levels`: the representatives of its S_1 lights (drawn with `seed`, or `drawn`
+    /// already where the builder drew them), the children of its coarser lights and its
+    /// centroids by vertex. With `tables`, what the builder's device keeps (`keeps`) is not
+    /// made: a copy of the VPLs, the representatives, the lookups. Without `grid`, the
+    /// caller has checked that the device keeps all of them.
     pub(super) fn add_unbiased(
         &mut self,
-        grid: &LightingGrid,
+        (grid, shape): (Option<&LightingGrid>, &GridShape),
         vpls: &Vpls,
         levels: ShadedLevels,
         (seed, drawn): (u64, Option<&[[u32; SLOTS]]>),
@@ -278,36 +225,44 @@ impl ShadeLights {
         // frame is for another backend's loop, which reads the slots' VPL indices (the GPU
         // reads the VPLs by index); only the CPU's loop reads them as `RepSet`s (576 bytes
         // an S_1 light), which are then not made.
-        let drawn = drawn.filter(|d| d.len() == grid.level_range(1).len());
+        let drawn = drawn.filter(|d| d.len() == shape.level_range(1).len());
         let input = vpls.as_input();
-        let (reps, slots): (Vec<RepSet>, Vec<[u32; SLOTS]>) = match (tables, drawn) {
-            (true, _) if keeps.representatives => (Vec::new(), Vec::new()),
-            (true, Some(d)) => (Vec::new(), d.to_vec()),
-            (true, None) => (Vec::new(), s1_representatives(grid, &input, seed, |s| *s)),
-            (false, Some(d)) => (
+        let (reps, slots): (Vec<RepSet>, Vec<[u32; SLOTS]>) = match (tables, drawn, grid) {
+            (true, _, _) if keeps.representatives => (Vec::new(), Vec::new()),
+            (true, Some(d), _) => (Vec::new(), d.to_vec()),
+            (true, None, Some(grid)) => {
+                (Vec::new(), s1_representatives(grid, &input, seed, |s| *s))
+            }
+            (false, Some(d), _) => (
                 d.par_iter().map(|s| RepSet::of(s, vpls)).collect(),
                 Vec::new(),
             ),
-            (false, None) => (
+            (false, None, Some(grid)) => (
                 s1_representatives(grid, &input, seed, |s| RepSet::of(s, vpls)),
                 Vec::new(),
             ),
+            (_, None, None) => (Vec::new(), Vec::new()),
         };
         // The walk's children, unless the device makes them from its own copy of the grid.
-        let lookups = tables && keeps.lookups;
-        let descent = if lookups {
-            Descent::default()
-        } else {
-            Descent::new(VertexLookup::new(grid, &VertexRows::new(grid)))
+        let descent = match grid {
+            Some(grid) if !(tables && keeps.lookups) => {
+                Descent::new(VertexLookup::new(grid, &VertexRows::new(grid)))
+            }
+            _ => Descent::default(),
         };
         let vpl_lights = if levels.lowest == 0 { vpls.len() } else { 0 };
         self.hierarchies.push(Hierarchy {
             reps,
-            partition: (!tables).then(|| Partition::new(grid, levels)),
+            partition: grid
+                .filter(|_| !tables)
+                .map(|grid| Partition::new(grid, levels)),
             descent,
             first,
             grid_base: first + vpl_lights,
-            tables: tables.then(|| GridTables::new(grid, levels, slots.into_iter(), vpls, keeps)),
+            tables: tables.then(|| match grid {
+                Some(grid) => GridTables::new(grid, levels, slots.into_iter(), vpls, keeps),
+                None => GridTables::on_device(shape, levels, vpls.len()),
+            }),
         });
     }
 
@@ -455,9 +410,7 @@ impl ShadeLights {
                 .node
                 .and_then(|u| self.hierarchies[p.hierarchy].reps.get(u))
             {
-                for a in 0..3 {
-                    touch += reps.position[a][0] + reps.normal[a][0] + reps.colour[a][0];
-                }
+                touch += reps.touch();
             }
         }
         std::hint::black_box(touch);
@@ -593,32 +546,6 @@ fn pick_weighted(weights: &[f32; SLOTS], total: f32, u: f32) -> usize {
     SLOTS - 1
 }
 
-/// An RGB value divided by its luminance (its colour at unit luminance); zero for a value
-/// without luminance.
-pub(super) fn chroma(c: Vec3) -> Vec3 {
-    let lum = luminance(c);
-    if lum > 0.0 { c / lum } else { Vec3::ZERO }
-}
-
-/// The colour `c` relative to the colour `of` channel by channel, zero in a channel where
-/// `of` has none: a light with no flux in a channel has no VPL with flux in it either.
-fn relative_colour(c: Vec3, of: Vec3) -> Vec3 {
-    Vec3::select(of.cmpgt(Vec3::ZERO), c / of, Vec3::ZERO)
-}
-
-/// The contribution at x (normal n_x) of a representative VPL at q (normal n_q) as a VPL
-/// of its light's intensity I, up to the factor luminance(I) / pi that a light's
-/// representatives share: cos_x cos_q / (d^2 + eps^2) = max(0, n_x . d) max(0, -n_q . d) /
-/// (d^2 (d^2 + eps^2)), d = q - x, without a branch or a square root (the shadow targets
-/// weigh 8 of them per selected sample). Zero where d = 0.
-#[inline]
-fn representative_weight(x: Vec3, n_x: Vec3, q: Vec3, n_q: Vec3, eps2: f32) -> f32 {
-    let d = q - x;
-    let d2 = d.length_squared();
-    let w = n_x.dot(d).max(0.0) * (-n_q.dot(d)).max(0.0) / (d2 * (d2 + eps2));
-    if w.is_finite() { w } else { 0.0 }
-}
-
 /// Splits VPLs into six groups by the dominant axis and sign of their normal (+x, -x, +y,
 /// -y, +z, -z), so that each hierarchy only averages normals that roughly agree.
 pub(super) fn split_by_normal(vpls: &Vpls) -> Vec<Vpls> {
@@ -637,54 +564,4 @@ pub(super) fn split_by_normal(vpls: &Vpls) -> Vec<Vpls> {
         groups[bin].push(vpls.positions[i], n, vpls.flux[i]);
     }
     groups
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use lgh_core::color::luminance;
-    use lgh_core::rng::Rng;
-    use lgh_core::vpl::light_irradiance;
-
-    /// A light or VPL with no flux in a channel (a pure-red wall's VPLs) gives a finite
-    /// colour, zero in that channel, and a VPL without flux no colour: divided channel by
-    /// channel, 0 / 0 would put NaN in the sample's gain.
-    #[test]
-    fn colours_of_lights_without_some_channel_stay_finite() {
-        let red = Vec3::new(0.8, 0.0, 0.0);
-        let vpl = Vec3::new(0.3, 0.0, 0.0);
-        let c = relative_colour(chroma(vpl), chroma(red));
-        assert_eq!(c, Vec3::new(1.0, 0.0, 0.0));
-        assert_eq!(chroma(Vec3::ZERO), Vec3::ZERO);
-        let mixed = relative_colour(chroma(Vec3::new(0.1, 0.2, 0.0)), chroma(Vec3::ONE));
-        assert!(mixed.is_finite() && mixed.z == 0.0 && mixed.y > mixed.x);
-    }
-
-    /// The representatives' weight is their VPL contribution divided by luminance(I) / pi,
-    /// for random positions and normals (both sides of both surfaces), and zero at d = 0.
-    #[test]
-    fn representative_weight_is_the_vpl_contribution() {
-        let mut rng = Rng::new(&[17, 3]);
-        let mut v = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
-        let intensity = Vec3::new(0.7, 1.3, 0.4);
-        let eps2 = 1e-4;
-        let mut lit = 0;
-        for _ in 0..2000 {
-            let (x, q) = (v(), v());
-            let (n_x, n_q) = (v().normalize(), v().normalize());
-            let exact = luminance(light_irradiance(x, n_x, q, n_q, 0.0, intensity, eps2));
-            let w = representative_weight(x, n_x, q, n_q, eps2) * luminance(intensity)
-                / std::f32::consts::PI;
-            assert!(
-                (w - exact).abs() <= 1e-4 * exact.max(1e-3),
-                "{w} vs {exact}"
-            );
-            lit += usize::from(exact > 0.0);
-        }
-        assert!(lit > 300, "{lit}");
-        assert_eq!(
-            representative_weight(Vec3::ONE, Vec3::Y, Vec3::ONE, -Vec3::Y, eps2),
-            0.0
-        );
-    }
 }

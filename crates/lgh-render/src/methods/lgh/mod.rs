@@ -57,6 +57,7 @@ use lgh_core::lighting_grid::GridError;
 pub mod light_batch;
 mod lights;
 mod prepared;
+mod rep_set;
 pub mod settings;
 mod shade;
 pub mod tables;
@@ -131,6 +132,10 @@ pub struct LghStats {
     /// builder handed them to the CPU's: the gather construction, or inputs too large for
     /// the adapter).
     pub hierarchy_device: &'static str,
+    /// Whether the CPU held the hierarchies' grids (its own builds, or grids read back);
+    /// false where their builder kept them on its device (a GPU frame whose every step
+    /// after the build runs there).
+    pub grids_on_cpu: bool,
 }
 
 /// Renders the indirect light of the VPLs with the lighting grid hierarchy. With

@@ -17,10 +17,11 @@ use lgh_core::vpl::Vpls;
 use rayon::prelude::*;
 
 use super::LghStats;
-use super::lights::{DeviceKeeps, LghTargets, ShadeLights, split_by_normal};
+use super::lights::{LghTargets, ShadeLights, split_by_normal};
 use super::settings::{DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt};
 use super::settings::{ShadowTarget, auto_tile};
 use super::shade::{RowContext, RowScratch, shade_rows};
+use super::tables::DeviceKeeps;
 use crate::memory::FrameMemory;
 use crate::methods::lgh::light_batch::PackedLight;
 use crate::methods::{MethodInputs, MethodOutput};
@@ -70,6 +71,9 @@ pub struct LghFrame {
 /// The shaded lights as the tile binning reads them ([`LghFrame::spheres`]).
 #[derive(Clone, Copy, Debug)]
 pub struct LightSpheres<'a> {
+    /// The number of lights: the arrays' length, or where a builder's device holds the
+    /// lights and makes their spheres there, theirs (the arrays are then empty).
+    pub count: usize,
     /// Centres.
     pub centres: &'a [Vec3],
     /// Radii of influence.
@@ -146,7 +150,10 @@ impl LghFrame {
     /// GPU's) instead of the CPU's in `memory`.
     ///
     /// # Errors
-    /// The VPLs cannot form a hierarchy (non-finite values).
+    /// The VPLs cannot form a hierarchy (non-finite values); or the builder kept a grid on
+    /// its device ([`HierarchyBuilder::shape`]) where the frame needs it on the CPU (without
+    /// `tables`, without the unbiased estimate's shadow samples, with one level shown
+    /// alone, or with some grids on the CPU and some not): [`GridError::KeptOnDevice`].
     pub fn prepare_with(
         inputs: &MethodInputs,
         shadowed: bool,
@@ -209,13 +216,34 @@ impl LghFrame {
             let start = Instant::now();
             builder.build(&input, settings.levels, settings.construction)?;
             build_ms += start.elapsed().as_secs_f64() * 1e3;
-            let Some(grid) = builder.grid() else { continue };
+            let Some(shape) = builder.shape() else {
+                continue;
+            };
             stats.hierarchy_device = builder.device();
             let start = Instant::now();
-            stats.grid_lights += grid.len();
-            stats.levels = stats.levels.max(grid.l_max());
-            let first = lights.position.len();
-            lights.add_hierarchy(grid, group, lowest, settings.alpha, settings.emission, n2);
+            stats.grid_lights += shape.len();
+            stats.levels = stats.levels.max(shape.l_max());
+            let keeps = DeviceKeeps {
+                lights: tables && builder.keeps_lights(),
+                representatives: tables && builder.keeps_representatives(),
+                lookups: tables && builder.makes_lookups(),
+            };
+            // A grid its builder keeps on its device serves a frame whose every later step
+            // runs there: the unbiased estimate's tables, from what the device keeps.
+            let grid = builder.grid();
+            stats.grids_on_cpu = grid.is_some();
+            let on_device = keeps.lights && keeps.representatives && keeps.lookups;
+            if grid.is_none() && !(on_device && draw && settings.only_level.is_none()) {
+                return Err(GridError::KeptOnDevice);
+            }
+            let first = lights.len();
+            match grid {
+                Some(grid) => {
+                    let (alpha, emission) = (settings.alpha, settings.emission);
+                    lights.add_hierarchy(grid, group, lowest, alpha, emission, n2)?;
+                }
+                None => lights.add_on_device(&shape, group.len(), lowest)?,
+            }
             lighting_ms += start.elapsed().as_secs_f64() * 1e3;
             if k > 0 && settings.shadow_target == ShadowTarget::Representative {
                 let start = Instant::now();
@@ -225,13 +253,16 @@ impl LghFrame {
                         alpha: settings.alpha,
                     };
                     let drawn = builder.representatives();
-                    let keeps = DeviceKeeps {
-                        lights: tables && builder.keeps_lights(),
-                        representatives: tables && builder.keeps_representatives(),
-                        lookups: tables && builder.makes_lookups(),
-                    };
-                    lights.add_unbiased(grid, group, levels, (seed, drawn), first, (tables, keeps));
-                } else {
+                    let reps = (seed, drawn);
+                    lights.add_unbiased(
+                        (grid, &shape),
+                        group,
+                        levels,
+                        reps,
+                        first,
+                        (tables, keeps),
+                    );
+                } else if let Some(grid) = grid {
                     lights.add_representatives(
                         grid,
                         group,
@@ -249,7 +280,7 @@ impl LghFrame {
             t.push("representatives", reps_ms);
         }
         let start = Instant::now();
-        stats.shaded_lights = lights.position.len();
+        stats.shaded_lights = lights.len();
         if let Some(level) = settings.only_level {
             lights.show_only_level(level);
         }
@@ -271,10 +302,19 @@ impl LghFrame {
         })))
     }
 
+    /// Whether the shaded lights are on the CPU: not where the hierarchies' builder keeps
+    /// them on its device ([`HierarchyBuilder::shape`]), which then makes their rows and
+    /// spheres itself; such a frame cannot be binned nor shaded on the CPU.
+    #[must_use]
+    pub fn lights_on_cpu(&self) -> bool {
+        self.lights.len() == self.lights.position.len()
+    }
+
     /// Bins the shaded lights into screen tiles on the CPU, for a frame prepared with
-    /// `tables` whose backend does not bin them itself; nothing if they are binned.
+    /// `tables` whose backend does not bin them itself; nothing if they are binned (or
+    /// not on the CPU, [`LghFrame::lights_on_cpu`]).
     pub fn bin_on_cpu(&mut self, inputs: &MethodInputs, memory: &mut FrameMemory) {
-        if self.bins.is_none() {
+        if self.bins.is_none() && self.lights_on_cpu() {
             let start = Instant::now();
             self.bins = Some(bin(&self.lights, inputs, memory, self.n, self.tile));
             self.lighting_ms += start.elapsed().as_secs_f64() * 1e3;
@@ -288,6 +328,7 @@ impl LghFrame {
     #[must_use]
     pub fn spheres(&self) -> LightSpheres<'_> {
         LightSpheres {
+            count: self.lights.len(),
             centres: &self.lights.position,
             radii: &self.lights.reach,
             sub: &self.lights.sub,

@@ -5,18 +5,18 @@
 //! for the walk down to S_1, and the S_1 lights' representatives.
 
 use glam::Vec3;
-use lgh_core::lighting_grid::LightingGrid;
 use lgh_core::lighting_grid::geometry::GridGeometry;
 use lgh_core::lighting_grid::lookup::row_starts;
 use lgh_core::lighting_grid::partition::ShadedLevels;
 use lgh_core::lighting_grid::representative::SLOTS;
+use lgh_core::lighting_grid::{GridShape, LightingGrid};
 
 use lgh_core::vpl::Vpls;
 use rayon::prelude::*;
 
 use super::LghFrame;
 use super::light_batch::PackedLight;
-use super::lights::{DeviceKeeps, chroma};
+use super::rep_set::chroma;
 use crate::shading::tiles::FlatBins;
 
 /// One hierarchy's grid as flat tables: its geometry and shaded levels, the x coordinate
@@ -29,7 +29,8 @@ pub struct GridTables {
     pub geometry: GridGeometry,
     /// The shaded levels (lowest, alpha).
     pub levels: ShadedLevels,
-    /// Per grid light, the x coordinate of its vertex.
+    /// Per grid light, the x coordinate of its vertex; empty where the builder keeps the
+    /// grid on its device ([`GridTables::lookups_on_device`]).
     pub vertex_x: Vec<u32>,
     /// Per level l = 1..=l_max (index l - 1), the row starts; empty where the builder's
     /// device makes them ([`GridTables::lookups_on_device`]).
@@ -88,6 +89,40 @@ impl GridTables {
                 .collect(),
         }
     }
+
+    /// The tables of a grid of shape `shape` that its builder keeps on its device, with
+    /// everything the device makes there (`DeviceKeeps` all true): built from `vpl_count`
+    /// VPLs and shaded at `levels`; no array is made on the CPU.
+    #[must_use]
+    pub(super) fn on_device(shape: &GridShape, levels: ShadedLevels, vpl_count: usize) -> Self {
+        Self {
+            geometry: shape.geometry,
+            levels,
+            vertex_x: Vec::new(),
+            rows: Vec::new(),
+            lookups_on_device: true,
+            len: shape.len(),
+            rep_vpls: Vec::new(),
+            s1_count: shape.level_range(1).len(),
+            vpls: Vec::new(),
+            vpl_count,
+        }
+    }
+}
+
+/// What a hierarchy builder's device keeps of its last build for a frame whose loop runs
+/// there ([`lgh_core::lighting_grid::HierarchyBuilder::keeps_lights`],
+/// [`keeps_representatives`](lgh_core::lighting_grid::HierarchyBuilder::keeps_representatives),
+/// [`makes_lookups`](lgh_core::lighting_grid::HierarchyBuilder::makes_lookups)): the CPU
+/// does not make these.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct DeviceKeeps {
+    /// The build's input lights (the VPLs the representatives index).
+    pub lights: bool,
+    /// The S_1 lights' representatives.
+    pub representatives: bool,
+    /// The vertex rows and the descent's children.
+    pub lookups: bool,
 }
 
 /// A VPL as the unbiased estimate's targets read it: position, normal and the colour of its
@@ -120,8 +155,11 @@ pub struct HierarchyTables<'a> {
 /// The lighting loop's inputs of one frame ([`LghFrame::tables`]).
 #[derive(Clone, Debug)]
 pub struct LghTables<'a> {
-    /// The shaded lights (intensities times n^2 for n x n interleaving).
+    /// The shaded lights (intensities times n^2 for n x n interleaving); empty where the
+    /// hierarchies' builder keeps them on its device (`light_count` of them).
     pub lights: &'a [PackedLight],
+    /// The number of shaded lights.
+    pub light_count: usize,
     /// The light list of every pixel; `None` if the frame's lights are not binned on the
     /// CPU ([`LghFrame::bin_on_cpu`]).
     pub bins: Option<FlatBins>,
@@ -154,6 +192,7 @@ impl LghFrame {
         }
         Some(LghTables {
             lights: &self.packed,
+            light_count: self.lights.len(),
             bins: self.bins.as_ref().map(|b| b.flatten(width, height)),
             hierarchies,
             k: self.k as u32,
