@@ -196,7 +196,7 @@ impl LightingGrid {
     /// Index range of the lights of level `l` (1..=l_max).
     #[must_use]
     pub fn level_range(&self, l: u32) -> std::ops::Range<usize> {
-        self.level_start[l as usize - 1] as usize..self.level_start[l as usize] as usize
+        shape::level_range(&self.level_start, l)
     }
 
     /// Number of lights per level, from S_1 up.

@@ -25,7 +25,7 @@ impl GridShape {
     /// Index range of the lights of level `l` (1..=l_max).
     #[must_use]
     pub fn level_range(&self, l: u32) -> std::ops::Range<usize> {
-        self.level_start[l as usize - 1] as usize..self.level_start[l as usize] as usize
+        level_range(&self.level_start, l)
     }
 
     /// Total number of grid lights.
@@ -39,6 +39,12 @@ impl GridShape {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+}
+
+/// Index range of the lights of level `l` (1..=l_max) of a grid whose levels start at
+/// `level_start` ([`LightingGrid::level_start`]).
+pub(super) fn level_range(level_start: &[u32], l: u32) -> std::ops::Range<usize> {
+    level_start[l as usize - 1] as usize..level_start[l as usize] as usize
 }
 
 impl LightingGrid {

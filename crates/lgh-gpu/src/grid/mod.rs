@@ -3,8 +3,9 @@
 //! trilinear splat of the lights, every coarser level by exact restriction from the one
 //! below (`lgh_core`'s [`Construction::Restrict`], which equals the all-scatter
 //! hierarchy), the number of levels by the paper's rule (section 4.3,
-//! [`lighting_grid::level_rule`]). The result is read back as a [`LightingGrid`] for the
-//! steps that still run on the CPU (the shaded lights, the unbiased estimate's tables).
+//! [`lighting_grid::level_rule`]). The result is read back as a [`LightingGrid`], or where
+//! the frame's later steps all run on the GPU ([`GpuGridBuilder::keep_grid`]) kept there
+//! with only its level ranges read back ([`HierarchyBuilder::shape`]).
 //!
 //! The passes (`shaders/grid/`), with the grid placed as the CPU places it
 //! ([`lighting_grid::bounds`], [`lighting_grid::shifted_bounds`]):
@@ -19,7 +20,11 @@
 //!    result does not depend on the order of the adds); `s1_sums` turns them into floats;
 //!    `restrict` gathers each coarser level from its 27 finer neighbours in a fixed order;
 //!    `emit` writes every vertex's grid light, level by level, read back in one copy (the
-//!    second wait); the CPU drops zero-intensity lights as it unpacks them.
+//!    second wait); the CPU drops zero-intensity lights as it unpacks them;
+//! 3. where the records are kept on the GPU, `kept` flags the records the CPU keeps and a
+//!    scan numbers them (`grid/number.rs`: each record's grid index, from which the frame's
+//!    tables are made on the GPU); with [`GpuGridBuilder::keep_grid`] the index at each
+//!    level's first record is read back in the records' place (the grid's level ranges).
 //!
 //! Memory: a bit per vertex of every resolution in use (17 MB at the finest, 512 cells per
 //! axis), 156 bytes per S_1 vertex of sums and 68 per vertex of every level. The gather

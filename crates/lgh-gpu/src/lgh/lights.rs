@@ -190,7 +190,7 @@ pub(super) fn record<'c>(
 mod tests {
     use super::*;
     use crate::grid::GpuGridBuilder;
-    use crate::lgh::testing::{FrameInputs, cornell, prepare};
+    use crate::lgh::testing::{FrameInputs, cornell_and_two_rooms, prepare};
     use glam::Vec4;
     use lgh_render::{RenderSettings, World};
 
@@ -255,13 +255,7 @@ mod tests {
         ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
     )]
     fn the_gpu_makes_the_cpus_shaded_lights() {
-        let two_rooms = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../scenes/test/two-rooms.toml");
-        let worlds = [
-            cornell(),
-            World::new(lgh_scene::load(&two_rooms).expect("scene")),
-        ];
-        for world in &worlds {
+        for world in &cornell_and_two_rooms() {
             for viewer in [false, true] {
                 let mut s = RenderSettings {
                     width: 48,

@@ -203,7 +203,7 @@ fn bindings<'a>(
 mod tests {
     use super::*;
     use crate::grid::GpuGridBuilder;
-    use crate::lgh::testing::{FrameInputs, cornell, prepare};
+    use crate::lgh::testing::{FrameInputs, cornell_and_two_rooms, prepare};
     use lgh_render::{RenderSettings, World};
 
     /// One hierarchy's lookups as read from the words: its vertex rows and descent starts,
@@ -258,13 +258,7 @@ mod tests {
         ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
     )]
     fn the_gpu_makes_the_cpus_lookups() {
-        let two_rooms = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../scenes/test/two-rooms.toml");
-        let worlds = [
-            cornell(),
-            World::new(lgh_scene::load(&two_rooms).expect("scene")),
-        ];
-        for world in &worlds {
+        for world in &cornell_and_two_rooms() {
             for (normal_bins, vpls) in [(false, 3000), (true, 3000), (false, 40_000)] {
                 let mut s = RenderSettings {
                     width: 32,

@@ -4,16 +4,22 @@
 //! light, a representative VPL by contribution) and one shadow ray each through the uploaded
 //! BVH, giving S and U.
 //!
-//! The hierarchies are built on the GPU ([`crate::grid`]) and read back, but for their S_1
-//! lights' representatives and the VPLs these index, which stay there for the loop
-//! (`held.rs`); the shaded lights and the unbiased estimate's tables are made on the CPU,
-//! as the CPU method makes them
-//! ([`LghFrame::prepare_with`]); the lights are binned into tiles on the GPU
-//! ([`crate::bins`], the CPU's lists) in the loop's submission; and the loop's other inputs
-//! go up as flat tables ([`LghFrame::tables`]); the steps after it (the interleaving blur,
+//! With shadow samples, the hierarchies are built on the GPU ([`crate::grid`]) and stay
+//! there: only their level ranges come back
+//! ([`keep_grid`](crate::grid::GpuGridBuilder::keep_grid)), and what the
+//! loop reads is made on the GPU from what the builds hold ([`crate::grid::Held`]): the
+//! shaded lights' table and the binning's spheres (`lights.rs`), the unbiased estimate's
+//! vertex rows and descent (`lookups.rs`), the S_1 lights' representatives and the VPLs
+//! these index (`held.rs`). The lights are binned into tiles on the GPU ([`crate::bins`],
+//! the CPU's lists) in the loop's submission; the steps after it (the interleaving blur,
 //! the ratio estimator with its a-trous filter) run on the GPU in the loop's submission
-//! ([`crate::ratio`]), and the CPU composites ([`LghFrame::finish_shadowed`]). A blur wider
-//! than the GPU's takes the CPU's (the loop's images read back, [`LghFrame::finish_with`]).
+//! ([`crate::ratio`]), and the CPU composites ([`LghFrame::finish_shadowed`]). Where a step
+//! needs the grids on the CPU (lists longer than the GPU's binning holds: the CPU bins
+//! them; a grid built on the CPU beside ones on the GPU), the frame is made again with the
+//! grids read back, and the CPU makes the shaded lights and tables as the CPU method does
+//! ([`LghFrame::prepare_with`], [`LghFrame::tables`]); so does a frame without shadow
+//! samples. A blur wider than the GPU's takes the CPU's (the loop's images read back,
+//! [`LghFrame::finish_with`]).
 //! It runs lgh's default estimate (unbiased, representative targets drawn at the ray,
 //! stratified selection); other settings are refused with a clear error.
 

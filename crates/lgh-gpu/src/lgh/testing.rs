@@ -19,6 +19,16 @@ pub(super) fn cornell() -> World {
     World::new(scene)
 }
 
+/// The built-in Cornell box and the two-rooms test scene (light through a door).
+pub(super) fn cornell_and_two_rooms() -> [World; 2] {
+    let two_rooms =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/test/two-rooms.toml");
+    [
+        cornell(),
+        World::new(lgh_scene::load(&two_rooms).expect("scene")),
+    ]
+}
+
 /// A frame's camera, G-buffer and VPLs, made on the CPU.
 pub(super) struct FrameInputs {
     camera: CameraFrame,
