@@ -15,7 +15,8 @@
 //! the ratio estimator with its a-trous filter) run on the GPU in the loop's submission
 //! ([`crate::ratio`]), and the CPU composites ([`LghFrame::finish_shadowed`]). Where a step
 //! needs the grids on the CPU (lists longer than the GPU's binning holds: the CPU bins
-//! them; a grid built on the CPU beside ones on the GPU), the frame is made again with the
+//! them; a grid built on the CPU beside ones on the GPU; a table past the adapter's
+//! buffers, sized for the most children a light may have), the frame is made again with the
 //! grids read back, and the CPU makes the shaded lights and tables as the CPU method does
 //! ([`LghFrame::prepare_with`], [`LghFrame::tables`]); so does a frame without shadow
 //! samples. A blur wider than the GPU's takes the CPU's (the loop's images read back,
@@ -198,6 +199,12 @@ fn frame(
         hierarchies,
         lights: table,
         before: Vec::new(),
+    };
+    // A buffer past the adapter's limits with the grids on the GPU (the lookups' slots
+    // hold 27 children a light): again with the grids read back, the CPU's tables exact.
+    let fail = |e: GpuError| match e {
+        GpuError::TooLarge(_) if resident => Attempt::Again,
+        e => Attempt::Failed(RenderError::Backend(e.to_string())),
     };
     if crate::ratio::supported(&filter) {
         // The loop, the blur and the ratio estimator in one submission.
