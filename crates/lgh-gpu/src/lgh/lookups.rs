@@ -68,15 +68,18 @@ pub fn sources() -> [String; 3] {
     ]
 }
 
-/// Row entries of a grid with `l_max` levels: `(r + 1)^2 + 1` for each level l >= 1 of r
-/// cells per axis.
+/// Row entries of level `l` of a grid with `l_max` levels: `(r + 1)^2 + 1` for r cells per
+/// axis (lgh-core's `row_starts`).
+fn level_row_entries(l_max: u32, l: u32) -> u32 {
+    let side = (1u32 << (l_max - l)) + 1;
+    side * side + 1
+}
+
+/// Row entries of a grid with `l_max` levels, over its levels l >= 1.
 #[must_use]
 pub(super) fn row_entries(l_max: u32) -> usize {
     (1..=l_max)
-        .map(|l| {
-            let side = (1usize << (l_max - l)) + 1;
-            side * side + 1
-        })
+        .map(|l| level_row_entries(l_max, l) as usize)
         .sum()
 }
 
@@ -125,8 +128,7 @@ pub(super) fn record<'c>(
         for l in 1..=(l_max as usize).min(LEVELS - 2) {
             params.start[l] = [at, entry, 0, 0];
             at += level_records.get(l - 1).copied().unwrap_or(0);
-            let side = (1u32 << (l_max as usize - l)) + 1;
-            entry += side * side + 1;
+            entry += level_row_entries(l_max, l as u32);
         }
         params.start[(l_max as usize + 1).min(LEVELS - 1)] = [at, entry, 0, 0];
         params.count = at;
