@@ -23,39 +23,71 @@ use crate::bench_quality::{
 use crate::render_cmd::args::Device;
 
 /// The curves of the sweep: (series name, the method it belongs to, settings without the
-/// VPL count): lgh at each of `--alphas`, slc at each of `--error-bounds`; a setting equal
-/// to the method's default is named after the method alone.
+/// VPL count): lgh at each of `--alphas` x `--interleaves` x `--shadow-samples`, slc at each
+/// of `--error-bounds` x `--shadow-samples`. A curve is named after its method and the
+/// settings where it departs from the method's defaults (`lgh`, `lgh alpha 2 n=4 k=3`).
 fn curves(args: &QualityBenchArgs) -> Vec<(String, &'static str, RenderSettings)> {
     let base = indirect_only(args.size, 0);
+    // None: the method's own number of shadow samples.
+    let ks: Vec<Option<u32>> = if args.shadow_samples.is_empty() {
+        vec![None]
+    } else {
+        args.shadow_samples.iter().copied().map(Some).collect()
+    };
+    let named = |method: &str, parts: Vec<String>| {
+        std::iter::once(method.to_string())
+            .chain(parts)
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
     let mut out = Vec::new();
+    let lgh_n = lgh_render::methods::lgh::DEFAULT_INTERLEAVE;
     for &alpha in args.alphas.iter() {
-        let mut s = RenderSettings {
-            method: LGH,
-            ..base.clone()
-        };
-        let default = s.lgh.alpha == alpha as f32;
-        s.lgh.alpha = alpha as f32;
-        let name = if default {
-            "lgh".into()
-        } else {
-            format!("lgh alpha {alpha}")
-        };
-        out.push((name, "lgh", s));
+        for &n in args.interleaves.iter() {
+            for &k in &ks {
+                let mut s = RenderSettings {
+                    method: LGH,
+                    ..base.clone()
+                };
+                let mut parts = Vec::new();
+                if s.lgh.alpha != alpha as f32 {
+                    parts.push(format!("alpha {alpha}"));
+                }
+                s.lgh.alpha = alpha as f32;
+                if n != lgh_n {
+                    parts.push(format!("n={n}"));
+                    s.tiling.interleave = Some(n);
+                }
+                if let Some(k) = k {
+                    if k != LGH.get().default_shadow_samples() {
+                        parts.push(format!("k={k}"));
+                    }
+                    s.shadows.samples = Some(k);
+                }
+                out.push((named("lgh", parts), "lgh", s));
+            }
+        }
     }
     for &bound in args.error_bounds.iter() {
-        let s = RenderSettings {
-            method: SLC,
-            error_bound: Some(bound as f32),
-            ..base.clone()
-        };
-        // Compared as the f32 the settings hold (0.0005 has no exact binary form).
-        let default = bound as f32 == lgh_render::methods::slc::DEFAULT_ERROR_BOUND;
-        let name = if default {
-            "slc".into()
-        } else {
-            format!("slc eb={bound}")
-        };
-        out.push((name, "slc", s));
+        for &k in &ks {
+            let mut s = RenderSettings {
+                method: SLC,
+                error_bound: Some(bound as f32),
+                ..base.clone()
+            };
+            let mut parts = Vec::new();
+            // Compared as the f32 the settings hold (0.0005 has no exact binary form).
+            if bound as f32 != lgh_render::methods::slc::DEFAULT_ERROR_BOUND {
+                parts.push(format!("eb={bound}"));
+            }
+            if let Some(k) = k {
+                if k != SLC.get().default_shadow_samples() {
+                    parts.push(format!("k={k}"));
+                }
+                s.shadows.samples = Some(k);
+            }
+            out.push((named("slc", parts), "slc", s));
+        }
     }
     out
 }
@@ -546,6 +578,65 @@ mod tests {
             rel_rmse,
             flip,
             rel_bias: 0.0,
+        }
+    }
+
+    /// The bench's arguments as clap parses `args`.
+    fn try_parsed(args: &[&str]) -> Result<QualityBenchArgs, clap::Error> {
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            args: QualityBenchArgs,
+        }
+        let argv = std::iter::once("bench").chain(args.iter().copied());
+        <Cli as clap::Parser>::try_parse_from(argv).map(|c| c.args)
+    }
+
+    fn parsed(args: &[&str]) -> QualityBenchArgs {
+        try_parsed(args).unwrap()
+    }
+
+    /// Every combination of the axes is a curve, named by where it departs from its
+    /// method's defaults, and carries those settings.
+    #[test]
+    fn the_curves_cross_every_axis() {
+        let names = |a: &QualityBenchArgs| curves(a).into_iter().map(|c| c.0).collect::<Vec<_>>();
+        let alone = ["--interleaves", "2", "--shadow-samples", ""];
+        assert_eq!(names(&parsed(&alone)), ["lgh", "slc"]);
+        assert_eq!(curves(&parsed(&[])).len(), 2 * 3 + 3);
+        let a = parsed(&[
+            "--interleaves",
+            "2,4",
+            "--shadow-samples",
+            "3,5",
+            "--alphas",
+            "3",
+        ]);
+        assert_eq!(
+            names(&a),
+            [
+                "lgh k=3",
+                "lgh",
+                "lgh n=4 k=3",
+                "lgh n=4",
+                "slc k=3",
+                "slc k=5"
+            ]
+        );
+        let c = curves(&a);
+        assert_eq!(c[2].2.tiling.interleave, Some(4));
+        assert_eq!(c[2].2.shadows.samples, Some(3));
+        assert_eq!(c[1].2.tiling.interleave, None);
+        assert_eq!(c[5].2.method, SLC);
+        assert_eq!(c[5].2.shadows.samples, Some(5));
+        // Each curve counts for its own method in the table.
+        assert!(c.iter().all(|(name, method, _)| of_method(name, method)));
+        for bad in [
+            &["--interleaves", "0"][..],
+            &["--interleaves", ""],
+            &["--shadow-samples", "17"],
+        ] {
+            assert!(try_parsed(bad).is_err(), "{bad:?}");
         }
     }
 

@@ -88,7 +88,7 @@ pub fn check_plot_path(path: &Path) -> Result<()> {
 }
 
 /// Colours of the curves, by order of first appearance.
-const COLOURS: [RGBColor; 8] = [
+const COLOURS: [RGBColor; 12] = [
     RGBColor(214, 39, 40),
     RGBColor(255, 127, 14),
     RGBColor(148, 103, 189),
@@ -97,6 +97,10 @@ const COLOURS: [RGBColor; 8] = [
     RGBColor(23, 190, 207),
     RGBColor(140, 86, 75),
     RGBColor(127, 127, 127),
+    RGBColor(227, 119, 194),
+    RGBColor(188, 189, 34),
+    RGBColor(0, 0, 128),
+    RGBColor(0, 0, 0),
 ];
 
 /// Draws the plot of `points` for `scenes` into `path`.
@@ -106,15 +110,16 @@ const COLOURS: [RGBColor; 8] = [
 pub fn plot(path: &Path, scenes: &[String], points: &[Point]) -> Result<()> {
     let text = register_font();
     let (cw, ch) = (420u32, 320u32);
-    let w = (cw * scenes.len().max(1) as u32).max(170 * 8);
-    let h = 2 * ch + 40;
-    let mut buf = vec![255u8; (w * h * 3) as usize];
     let mut names: Vec<&str> = Vec::new();
     for p in points {
         if !names.contains(&p.series.as_str()) && p.ms > 0.0 && p.flip > 0.0 {
             names.push(&p.series);
         }
     }
+    // Room for every curve's name in the legend.
+    let w = (cw * scenes.len().max(1) as u32).max(170 * names.len().max(8) as u32);
+    let h = 2 * ch + 40;
+    let mut buf = vec![255u8; (w * h * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
         let (legend, body) = root.split_vertically(40);

@@ -64,6 +64,16 @@ pub struct QualityBenchArgs {
     /// slc's default alone).
     #[arg(long, default_value = "0.0005", value_parser = parse_error_bounds)]
     pub error_bounds: Budgets,
+    /// --equal-time: lgh's n x n interleavings, comma-separated, each its own curve with
+    /// every alpha and shadow-sample count (its default 2, and 4: a quarter of the lights a
+    /// pixel, for the small budgets). slc keeps its own 8, cheaper than any smaller n and
+    /// better than none even at equal VPLs (docs/design.md, "Interleaved sampling").
+    #[arg(long, default_value = "2,4", value_parser = parse_interleaves)]
+    pub interleaves: Counts,
+    /// --equal-time: shadow samples, comma-separated, each its own curve for both methods
+    /// (an empty list: each method's own, lgh 5 and slc 4).
+    #[arg(long, default_value = "3,4,5", value_parser = parse_shadow_samples)]
+    pub shadow_samples: Counts,
     /// --equal-time: the converged reference of each scene (EXR, in the order of the
     /// scenes): read if it exists, else rendered and written there. Default: a file in
     /// `--reference-dir` named by scene, size and reference settings.
@@ -272,6 +282,31 @@ fn parse_budgets(s: &str) -> Result<Budgets, String> {
 /// Parses `1.5,2,3` into lgh's alphas.
 fn parse_alphas(s: &str) -> Result<Budgets, String> {
     parse_positive(s, "alpha", 16.0)
+}
+
+/// Parses `2,4` into lgh's interleavings (1 to 16; at least one).
+fn parse_interleaves(s: &str) -> Result<Counts, String> {
+    let v = parse_list(
+        s,
+        |n: &u32| (1..=16).contains(n),
+        "an interleaving from 1 to 16",
+    )?;
+    if v.is_empty() {
+        return Err("no interleaving given".into());
+    }
+    Ok(Counts(v))
+}
+
+/// Parses `3,5` (or nothing: each method's default) into shadow-sample counts of 1 to
+/// the most a pixel takes.
+fn parse_shadow_samples(s: &str) -> Result<Counts, String> {
+    let max = lgh_render::shading::ratio::MAX_SHADOW_SAMPLES;
+    parse_list(
+        s,
+        |n: &u32| (1..=max).contains(n),
+        &format!("a shadow-sample count from 1 to {max}"),
+    )
+    .map(Counts)
 }
 
 /// Parses `0.0005,0.002` into slc's error bounds.

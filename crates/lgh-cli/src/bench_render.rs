@@ -129,6 +129,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
                 gbuffer: &g,
                 camera: &frame,
                 vpls: &set.vpls,
+                vpl_count: set.vpls.len(),
                 settings: &settings,
                 progress: &Silent,
             };

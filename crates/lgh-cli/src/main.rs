@@ -60,7 +60,7 @@ enum Command {
     Diff(diff_cmd::DiffArgs),
     /// Measure performance.
     #[command(allow_negative_numbers = true)]
-    Bench(bench_cmd::BenchArgs),
+    Bench(Box<bench_cmd::BenchArgs>),
     /// Join the pieces of a frame rendered with `lgh render --tile I/N` (render farms):
     /// they must belong to one frame, share its settings and cover it once.
     Merge(merge_cmd::MergeArgs),

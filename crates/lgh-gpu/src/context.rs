@@ -60,7 +60,7 @@ pub struct GpuContext {
     /// What hierarchy builders keep between frames ([`crate::grid::GpuGridBuilder`]).
     grids: crate::grid::GridStates,
     /// The frame's VPLs kept for its hierarchy build ([`crate::vpls`]).
-    resident_vpls: Mutex<Option<crate::vpls::resident::Resident>>,
+    resident_vpls: crate::vpls::resident::Slots,
 }
 
 impl GpuContext {
@@ -101,7 +101,7 @@ impl GpuContext {
             pool: BufferPool::default(),
             gbuffers: GBufferCache::default(),
             grids: crate::grid::GridStates::default(),
-            resident_vpls: Mutex::default(),
+            resident_vpls: crate::vpls::resident::Slots::default(),
         })
     }
 
@@ -251,7 +251,7 @@ impl GpuContext {
     }
 
     /// The frame's VPLs kept for its hierarchy build.
-    pub(crate) fn resident_vpls(&self) -> &Mutex<Option<crate::vpls::resident::Resident>> {
+    pub(crate) fn resident_vpls(&self) -> &crate::vpls::resident::Slots {
         &self.resident_vpls
     }
 

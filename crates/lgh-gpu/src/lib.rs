@@ -48,11 +48,13 @@ pub use pool::Lease;
 pub use scene::GpuScene;
 
 /// The hooks of lgh-render's `IndirectMethod` by which a GPU method runs the frame's other
-/// passes on the GPU: the G-buffer ([`primary`]), the VPLs ([`vpls`]; `for_grid`: keep
-/// them on the GPU for the method's hierarchy build), the direct light ([`direct`]) and the
-/// edge resolve ([`edges`]). Expanded inside the method's `impl IndirectMethod`.
+/// passes on the GPU: the G-buffer ([`primary`]), the VPLs ([`vpls`]; the method's
+/// `$vpls(&self, settings) -> (bool, bool)` says whether they are also kept on the GPU
+/// for its hierarchy build, and whether they are kept there only, not read back), the
+/// direct light ([`direct`]) and the edge resolve ([`edges`]). Expanded inside the
+/// method's `impl IndirectMethod`.
 macro_rules! gpu_frame_passes {
-    (for_grid: $for_grid:expr) => {
+    (vpls: $vpls:ident) => {
         fn direct(
             &self,
             world: &lgh_render::World,
@@ -78,7 +80,7 @@ macro_rules! gpu_frame_passes {
             s: &lgh_render::RenderSettings,
         ) -> Result<Option<lgh_render::passes::vpl_gen::VplSet>, lgh_render::settings::RenderError>
         {
-            crate::vpls::method_vpls(world, s, $for_grid)
+            crate::vpls::method_vpls(world, s, self.$vpls(s))
         }
 
         fn edge_resolve(

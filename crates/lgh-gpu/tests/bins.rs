@@ -41,6 +41,7 @@ fn both(
         gbuffer: &g,
         camera: &camera,
         vpls: &vpls.vpls,
+        vpl_count: vpls.vpls.len(),
         settings: &s,
         progress: &Silent,
     };

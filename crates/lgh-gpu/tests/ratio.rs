@@ -35,6 +35,7 @@ fn compare(w: &World, s: &RenderSettings, shadowed: bool) -> f32 {
         gbuffer: &g,
         camera: &camera,
         vpls: &vpls.vpls,
+        vpl_count: vpls.vpls.len(),
         settings: s,
         progress: &Silent,
     };

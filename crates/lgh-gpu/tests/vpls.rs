@@ -158,7 +158,7 @@ fn a_frames_vpls_stay_on_the_gpu_for_its_build() {
             b.grid().expect("grid").clone(),
         )
     };
-    let set = lgh_gpu::vpls::method_vpls(&world, &s, true)
+    let set = lgh_gpu::vpls::method_vpls(&world, &s, (true, false))
         .expect("gpu")
         .expect("vpls on the gpu");
     let (uploaded, kept) = build(&set.vpls);
@@ -166,7 +166,7 @@ fn a_frames_vpls_stay_on_the_gpu_for_its_build() {
     let (uploaded, again) = build(&set.vpls);
     assert!(uploaded, "a second build uploads");
     assert_eq!(kept, again, "the same grid");
-    let set = lgh_gpu::vpls::method_vpls(&world, &s, true)
+    let set = lgh_gpu::vpls::method_vpls(&world, &s, (true, false))
         .expect("gpu")
         .expect("vpls on the gpu");
     let copy = set.vpls.clone();
@@ -175,4 +175,86 @@ fn a_frames_vpls_stay_on_the_gpu_for_its_build() {
     assert_eq!(from_copy, kept);
     let (uploaded, _) = build(&set.vpls);
     assert!(uploaded, "the kept VPLs went with the first build");
+}
+
+/// VPLs kept on the GPU without being read back: the CPU gets their number and light paths,
+/// the build their bounds (found on the GPU: exactly the CPU's of the read-back VPLs) and
+/// the same grid; a builder on another thread, or one asked for another count, finds
+/// nothing, and a builder with nothing kept refuses (the frame then reads them back).
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn vpls_kept_without_a_copy_build_the_grid_of_the_read_back_ones() {
+    use lgh_core::lighting_grid::{Construction, GridError, HierarchyBuilder, LevelCount};
+    let ctx = lgh_gpu::GpuContext::shared().expect("an adapter");
+    for rel in [
+        None,
+        Some("test/two-rooms.toml"),
+        Some("test/colonnade.toml"),
+    ] {
+        let world = world(rel);
+        let s = lgh_render::RenderSettings {
+            vpls: 6_000,
+            seed: 2,
+            ..lgh_render::RenderSettings::default()
+        };
+        let read = lgh_gpu::vpls::method_vpls(&world, &s, (true, false))
+            .expect("gpu")
+            .expect("vpls on the gpu");
+        let grid_of_read = {
+            let mut b = lgh_gpu::grid::GpuGridBuilder::new(ctx);
+            b.build(
+                &read.vpls.as_input(),
+                LevelCount::Auto,
+                Construction::Restrict,
+            )
+            .expect("build");
+            b.grid().expect("grid").clone()
+        };
+        let keep = || {
+            let set = lgh_gpu::vpls::method_vpls(&world, &s, (true, true))
+                .expect("gpu")
+                .expect("vpls on the gpu");
+            assert!(set.vpls.is_empty(), "{rel:?}: read back");
+            assert_eq!(
+                (set.kept, set.len(), set.paths),
+                (read.vpls.len(), read.len(), read.paths)
+            );
+            set
+        };
+        let set = keep();
+        let mut b = lgh_gpu::grid::GpuGridBuilder::new(ctx);
+        b.build_held(set.kept, LevelCount::Auto, Construction::Restrict)
+            .expect("build of the kept VPLs");
+        assert_eq!(b.grid(), Some(&grid_of_read), "{rel:?}: another grid");
+        assert!(b.keeps_lights());
+        // Taken by that build.
+        assert_eq!(
+            b.build_held(set.kept, LevelCount::Auto, Construction::Restrict)
+                .unwrap_err(),
+            GridError::KeptOnDevice
+        );
+        // Another count, another thread: not theirs.
+        let set = keep();
+        assert!(
+            b.build_held(set.kept + 1, LevelCount::Auto, Construction::Restrict)
+                .is_err()
+        );
+        let set = keep();
+        std::thread::scope(|scope| {
+            scope
+                .spawn(|| {
+                    let mut b = lgh_gpu::grid::GpuGridBuilder::new(ctx);
+                    let e = b.build_held(set.kept, LevelCount::Auto, Construction::Restrict);
+                    assert_eq!(e.unwrap_err(), GridError::KeptOnDevice);
+                })
+                .join()
+                .expect("thread");
+        });
+        b.build_held(set.kept, LevelCount::Auto, Construction::Restrict)
+            .expect("still kept for this thread");
+        assert_eq!(b.grid(), Some(&grid_of_read));
+    }
 }

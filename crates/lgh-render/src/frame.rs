@@ -187,6 +187,7 @@ pub fn render_frame_with(
         gbuffer: &g,
         camera: &camera,
         vpls: &vpls.vpls,
+        vpl_count: vpls.len(),
         settings: s,
         progress,
     };

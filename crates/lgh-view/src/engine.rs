@@ -202,7 +202,7 @@ impl FrameLoop {
             pixels: packed,
             exposure,
             timings,
-            vpls: frame.vpls.vpls.len(),
+            vpls: frame.vpls.len(),
             grid_lights: lgh_stats.map(|s| s.grid_lights),
             levels: lgh_stats.map(|s| (state.settings.lgh.start_level.min(1), s.levels)),
             accumulated: self.accumulated,

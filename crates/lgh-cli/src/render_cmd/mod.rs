@@ -234,7 +234,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             settings.width,
             settings.height,
             world.accel.len(),
-            frame.vpls.vpls.len(),
+            frame.vpls.len(),
             frame.vpls.paths,
             settings.method.name(),
             frame.timings.get("total").unwrap_or(0.0) + bvh_ms,

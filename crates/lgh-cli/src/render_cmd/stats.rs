@@ -111,7 +111,7 @@ impl<'a> FrameReport<'a> {
             scene: c.scene,
             width: s.width,
             height: s.height,
-            vpls: frame.vpls.vpls.len(),
+            vpls: frame.vpls.len(),
             vpls_requested: s.vpls,
             light_paths: frame.vpls.paths,
             bounces: s.bounces,
@@ -129,8 +129,8 @@ impl<'a> FrameReport<'a> {
                 estimate: c.estimate,
                 peak_bytes: crate::sysmem::peak_bytes(),
                 peak_bytes_per_vpl: crate::sysmem::peak_bytes()
-                    .filter(|_| !frame.vpls.vpls.is_empty())
-                    .map(|p| p as f64 / frame.vpls.vpls.len() as f64),
+                    .filter(|_| !frame.vpls.is_empty())
+                    .map(|p| p as f64 / frame.vpls.len() as f64),
             },
             method_stats,
             settings: s,

@@ -154,8 +154,12 @@ pub enum GridError {
         index: usize,
     },
     /// The builder kept a grid on its device ([`HierarchyBuilder::shape`]) for a frame
-    /// that needs it on the CPU, or built some of a frame's grids there and some not.
-    #[error("the hierarchy builder kept a grid on its device, but this frame needs it on the CPU")]
+    /// that needs it on the CPU, or built some of a frame's grids there and some not; or
+    /// the frame's VPLs are kept on a device whose builder cannot build from them
+    /// ([`HierarchyBuilder::build_held`]) or where the frame needs them on the CPU.
+    #[error(
+        "the hierarchy builder's device keeps a grid or its lights, but this frame needs them on the CPU"
+    )]
     KeptOnDevice,
 }
 
@@ -412,6 +416,23 @@ pub trait HierarchyBuilder: Send {
         levels: LevelCount,
         construction: Construction,
     ) -> Result<BuildTimings, GridError>;
+
+    /// Builds the hierarchy of the `count` lights the builder's device already holds (a
+    /// GPU's: the frame's VPLs, made there and not read back), as [`HierarchyBuilder::build`]
+    /// builds it of the same lights.
+    ///
+    /// # Errors
+    /// The builder holds no such lights (the default: none does),
+    /// [`GridError::KeptOnDevice`]; or a light is invalid, as in `build`.
+    fn build_held(
+        &mut self,
+        count: usize,
+        levels: LevelCount,
+        construction: Construction,
+    ) -> Result<BuildTimings, GridError> {
+        let _ = (count, levels, construction);
+        Err(GridError::KeptOnDevice)
+    }
 
     /// The last hierarchy built; `None` also where the builder keeps it on its device
     /// ([`HierarchyBuilder::shape`] then describes it).

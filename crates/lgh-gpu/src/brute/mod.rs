@@ -37,6 +37,14 @@ struct GpuBrute {
     shadowed: bool,
 }
 
+impl GpuBrute {
+    /// The brute force reads its VPLs from the CPU's copy and builds no hierarchy.
+    #[allow(clippy::unused_self)]
+    fn vpl_places(&self, _: &lgh_render::RenderSettings) -> (bool, bool) {
+        (false, false)
+    }
+}
+
 /// `Params` of the shader.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -63,7 +71,7 @@ impl IndirectMethod for GpuBrute {
         "Every pixel sums every VPL (with an exact shadow ray each unless unshadowed), on the GPU"
     }
 
-    crate::gpu_frame_passes!(for_grid: false);
+    crate::gpu_frame_passes!(vpls: vpl_places);
 
     fn render(&self, i: &MethodInputs, _: &mut FrameMemory) -> Result<MethodOutput, RenderError> {
         let fail = |e: GpuError| RenderError::Backend(e.to_string());

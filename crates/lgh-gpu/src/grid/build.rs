@@ -31,10 +31,15 @@ pub(super) struct Request {
     pub(super) keep_grid: bool,
 }
 
-/// The lights of one build: on the CPU, and the same on the GPU if they are there already.
+/// The lights of one build: on the CPU, and the same on the GPU if they are there already
+/// (`resident`); or only there (`lights` `None`: the frame's VPLs, not read back).
 pub(super) struct Run<'a, 'c> {
-    pub(super) lights: &'a InputLights<'a>,
+    pub(super) lights: Option<&'a InputLights<'a>>,
     pub(super) resident: Option<Lease<'c>>,
+    /// How many lights.
+    pub(super) count: usize,
+    /// Whether they have normals.
+    pub(super) normals: bool,
     pub(super) request: &'a Request,
 }
 
@@ -52,6 +57,8 @@ pub(super) fn build_on<'c>(
     let Run {
         lights,
         resident,
+        count: n,
+        normals,
         request,
     } = run;
     let Request {
@@ -63,7 +70,6 @@ pub(super) fn build_on<'c>(
     } = *request;
     state.kept_shape = None;
     state.drawn = false;
-    let n = lights.positions.len();
     let top = GridGeometry::new(lo, hi, MAX_LEVELS);
     let degenerate = n < 2 || (hi - lo).max_element() <= 0.0;
     let first_marks = match levels {
@@ -81,14 +87,15 @@ pub(super) fn build_on<'c>(
     // walk usually stays within two levels of its guess: those are marked first, and all
     // ten only if the walk reaches the last marked.
     // (No upload where the frame's VPLs are on the GPU already: no `gpu_upload` time.)
-    let up = match resident {
-        Some(lease) => lease,
-        None => {
+    let up = match (resident, lights) {
+        (Some(lease), _) => lease,
+        (None, Some(lights)) => {
             let start = Instant::now();
             let up = upload_lights(ctx, lights)?;
             t.push("gpu_upload", start.elapsed().as_secs_f64() * 1e3);
             up
         }
+        (None, None) => return Err(GpuError::Failed("the build's lights are missing".into())),
     };
     let start = Instant::now();
     let mut m = marks::mark(ctx, &up, &base, n, first_marks, passes)?;
@@ -306,7 +313,7 @@ pub(super) fn build_on<'c>(
         let grid = state
             .grid
             .get_or_insert_with(|| GridBuilder::default().into_grid());
-        unpack(geometry, &counts, words, lights.normals.is_some(), grid);
+        unpack(geometry, &counts, words, normals, grid);
     }
     let mut slots = None;
     match drawn {

@@ -41,7 +41,7 @@ use lgh_core::lighting_grid::{
 };
 
 use crate::batch::PassTimes;
-use crate::context::GpuContext;
+use crate::context::{GpuContext, GpuError};
 use crate::pool::Lease;
 
 mod build;
@@ -299,6 +299,32 @@ impl<'c> GpuGridBuilder<'c> {
     }
 }
 
+impl<'c> GpuGridBuilder<'c> {
+    /// What a build on the GPU fitted to `(lo, hi)` with `levels` is asked for.
+    fn request(&mut self, (lo, hi): (Vec3, Vec3), levels: LevelCount) -> Request {
+        let (keep_slots, keep_grid) = (self.keep_slots || self.keep_grid, self.keep_grid);
+        let state = self.state();
+        Request {
+            levels,
+            bounds: lighting_grid::shifted_bounds(lo, hi, state.cpu.shift()),
+            seed: state.seed,
+            keep_slots,
+            keep_grid,
+        }
+    }
+
+    /// Builds `run` on the GPU; what it holds is kept for [`GpuGridBuilder::take_held`].
+    fn build_gpu(&mut self, run: Run<'_, 'c>, t: &mut BuildTimings) -> Result<(), GpuError> {
+        let ctx = self.ctx;
+        let state = self.state.get_or_insert_with(GridState::default);
+        let held = build_on(ctx, run, state, t, &mut self.passes)?;
+        state.on_cpu = false;
+        state.built = true;
+        self.kept.push(Some(held));
+        Ok(())
+    }
+}
+
 impl Drop for GpuGridBuilder<'_> {
     fn drop(&mut self) {
         if let Some(s) = self.state.take() {
@@ -333,28 +359,17 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
         let resident = crate::vpls::resident::take(self.ctx, lights);
         if construction != Construction::GatherFromS1 {
             let mut t = BuildTimings::default();
-            let (lo, hi) = t.time("bounds", || lighting_grid::bounds(lights))?;
-            let ctx = self.ctx;
-            let state = self.state.get_or_insert_with(GridState::default);
-            let request = Request {
-                levels,
-                bounds: lighting_grid::shifted_bounds(lo, hi, state.cpu.shift()),
-                seed: state.seed,
-                keep_slots: self.keep_slots || self.keep_grid,
-                keep_grid: self.keep_grid,
-            };
+            let bounds = t.time("bounds", || lighting_grid::bounds(lights))?;
+            let request = self.request(bounds, levels);
             let run = Run {
-                lights,
+                lights: Some(lights),
                 resident,
+                count: lights.positions.len(),
+                normals: lights.normals.is_some(),
                 request: &request,
             };
-            match build_on(ctx, run, state, &mut t, &mut self.passes) {
-                Ok(held) => {
-                    state.on_cpu = false;
-                    state.built = true;
-                    self.kept.push(Some(held));
-                    return Ok(t);
-                }
+            match self.build_gpu(run, &mut t) {
+                Ok(()) => return Ok(t),
                 Err(e) => self.fallback = Some(e.to_string()),
             }
         }
@@ -363,6 +378,45 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
         state.on_cpu = true;
         state.built = true;
         state.cpu.build(lights, levels, construction)
+    }
+
+    fn build_held(
+        &mut self,
+        count: usize,
+        levels: LevelCount,
+        construction: Construction,
+    ) -> Result<BuildTimings, GridError> {
+        self.fallback = None;
+        self.passes.clear();
+        let held = crate::vpls::resident::take_held(self.ctx, count);
+        let Some((lights, held)) = held.filter(|_| construction != Construction::GatherFromS1)
+        else {
+            return Err(GridError::KeptOnDevice);
+        };
+        let bounds = held
+            .bounds
+            .map_err(|index| GridError::InvalidLight { index })?;
+        if count == 0 {
+            return Err(GridError::Empty);
+        }
+        let mut t = BuildTimings::default();
+        let request = self.request(bounds, levels);
+        let run = Run {
+            lights: None,
+            resident: Some(lights),
+            count,
+            normals: true,
+            request: &request,
+        };
+        match self.build_gpu(run, &mut t) {
+            Ok(()) => Ok(t),
+            Err(e) => {
+                // The CPU has no copy to build from: the frame is made again with one.
+                self.fallback = Some(e.to_string());
+                self.state().built = false;
+                Err(GridError::KeptOnDevice)
+            }
+        }
     }
 
     fn device(&self) -> &'static str {

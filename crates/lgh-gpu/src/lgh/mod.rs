@@ -87,7 +87,7 @@ impl IndirectMethod for GpuLgh {
         self.cpu.get().default_shadow_samples()
     }
 
-    crate::gpu_frame_passes!(for_grid: true);
+    crate::gpu_frame_passes!(vpls: vpl_places);
 
     fn render(
         &self,
@@ -114,6 +114,19 @@ impl IndirectMethod for GpuLgh {
                 Ok(output) => return Ok(output),
             }
         }
+        // VPLs kept on the GPU without a copy here (`vpl_places`) are read back first.
+        let read;
+        let inputs = if inputs.vpls.len() < inputs.vpl_count {
+            read = crate::vpls::read_back_kept(ctx, inputs.world, s, inputs.vpl_count)
+                .map_err(fail)?;
+            &MethodInputs {
+                vpls: &read,
+                vpl_count: read.len(),
+                ..*inputs
+            }
+        } else {
+            inputs
+        };
         match frame(ctx, inputs, memory, shadowed, false) {
             Ok(output) => Ok(output),
             Err(Attempt::Failed(e)) => Err(e),
@@ -121,6 +134,24 @@ impl IndirectMethod for GpuLgh {
                 "lgh on the GPU: the hierarchies' grids are not on the CPU".into(),
             )),
         }
+    }
+}
+
+impl GpuLgh {
+    /// Where the frame's VPLs go: kept on the GPU for the hierarchy build, and where the
+    /// frame's every later pass runs on the GPU (shadow samples with lgh's default
+    /// estimate, one hierarchy, every level shown, a construction the GPU builds) not read
+    /// back at all. Where the frame has to be made with its grids on the CPU after all
+    /// ([`Attempt::Again`]), they are read back then.
+    fn vpl_places(&self, s: &lgh_render::RenderSettings) -> (bool, bool) {
+        let l = &s.lgh;
+        let only_grid = self.cpu == LGH
+            && s.shadows.k(true, DEFAULT_SHADOW_SAMPLES) > 0
+            && supported(l).is_ok()
+            && !l.normal_bins
+            && l.only_level.is_none()
+            && l.construction != lgh_core::lighting_grid::Construction::GatherFromS1;
+        (true, only_grid)
     }
 }
 
@@ -450,8 +481,91 @@ fn lighting_loop<'c>(
 mod tests {
     use super::*;
     use crate::grid::GpuGridBuilder;
-    use crate::lgh::testing::{FrameInputs, cornell};
+    use crate::lgh::testing::{FrameInputs, cornell, cornell_and_two_rooms};
     use lgh_render::RenderSettings;
+
+    /// A frame whose VPLs stay on the GPU, never read back, is the frame of the same VPLs
+    /// read back, pixel for pixel: at the viewer's settings (S_1 lowest, and S_0 too), and
+    /// where the frame has to be made with its grids on the CPU after all (one level shown
+    /// alone), from the kept light-path records or, where those are gone, traced again.
+    #[test]
+    #[cfg_attr(
+        not(gpu_adapter),
+        ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+    )]
+    fn vpls_kept_on_the_gpu_give_the_frame_of_the_vpls_read_back() {
+        let ctx = GpuContext::shared().expect("an adapter");
+        let none = lgh_core::vpl::Vpls::default();
+        let render = |inputs: &MethodInputs| {
+            let mut memory = FrameMemory::default();
+            let out = LGH_GPU.get().render(inputs, &mut memory).expect("frame");
+            let stats = out.stats::<lgh_render::methods::lgh::LghStats>();
+            (out.radiance.clone(), stats.expect("stats").grids_on_cpu)
+        };
+        for world in &cornell_and_two_rooms() {
+            for start_level in [1, 0] {
+                let mut s = RenderSettings {
+                    width: 48,
+                    height: 27,
+                    vpls: 3000,
+                    component: lgh_render::Component::Indirect,
+                    ..RenderSettings::default()
+                };
+                s.lgh.normal_bins = false;
+                s.lgh.start_level = start_level;
+                s.lgh.alpha = 1.5;
+                s.tiling.interleave = Some(4);
+                s.shadows.samples = Some(4);
+                let made = FrameInputs::new(world, &s);
+                let read = |s: &RenderSettings| {
+                    let set = crate::vpls::method_vpls(world, s, (true, false))
+                        .expect("gpu")
+                        .expect("vpls");
+                    assert!(set.kept == 0 && !set.vpls.is_empty());
+                    let inputs = MethodInputs {
+                        vpls: &set.vpls,
+                        vpl_count: set.vpls.len(),
+                        ..made.inputs(world, s)
+                    };
+                    (render(&inputs), set.vpls.len(), set.paths)
+                };
+                let kept = |s: &RenderSettings, records: bool| {
+                    let set = crate::vpls::method_vpls(world, s, (true, true))
+                        .expect("gpu")
+                        .expect("vpls");
+                    assert!(set.vpls.is_empty() && set.kept > 0);
+                    if !records {
+                        crate::vpls::resident::clear(ctx);
+                    }
+                    let inputs = MethodInputs {
+                        vpls: &none,
+                        vpl_count: set.kept,
+                        ..made.inputs(world, s)
+                    };
+                    (render(&inputs), set.kept, set.paths)
+                };
+                let (a, n, paths) = read(&s);
+                let (b, kept_n, kept_paths) = kept(&s, true);
+                assert_eq!((kept_n, kept_paths), (n, paths));
+                assert!(a.0.iter().any(|p| p.max_element() > 0.0));
+                assert!(
+                    a.0 == b.0,
+                    "start level {start_level}: kept VPLs, another image"
+                );
+                assert!(!b.1, "the grids stayed on the GPU");
+                // Not read back: the light-path records are still kept.
+                assert!(crate::vpls::resident::take_records(ctx, n).is_some());
+                // Made again with the grids on the CPU: the kept VPLs are read back.
+                s.lgh.only_level = Some(2);
+                let (a, _, _) = read(&s);
+                for records in [true, false] {
+                    let (b, _, _) = kept(&s, records);
+                    assert!(a.0 == b.0, "one level, records {records}: another image");
+                    assert!(b.1, "grids on the CPU");
+                }
+            }
+        }
+    }
 
     /// A frame prepared from grids kept on the GPU holds no shaded light on the CPU where
     /// every later step runs on the GPU (the unbiased estimate's shadow samples), and is

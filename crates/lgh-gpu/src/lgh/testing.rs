@@ -61,6 +61,7 @@ impl FrameInputs {
             gbuffer: &self.g,
             camera: &self.camera,
             vpls: &self.vpls.vpls,
+            vpl_count: self.vpls.vpls.len(),
             settings: s,
             progress: &Silent,
         }

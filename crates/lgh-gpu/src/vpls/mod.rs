@@ -97,16 +97,30 @@ pub fn generate_vpls(
     bounces: u32,
     seed: u64,
 ) -> Result<VplSet, GpuError> {
-    generate(ctx, world, (target, bounces, seed), false).map(|(set, _)| set)
+    generate(ctx, world, (target, bounces, seed), Want::Cpu).map(|(set, _)| set)
 }
 
-/// [`generate_vpls`] for `(target, bounces, seed)`, and with `for_grid` the VPLs also in
-/// the hierarchy build's layout, left on the GPU.
+/// Where a frame wants its VPLs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Want {
+    /// Read back.
+    Cpu,
+    /// Read back, and also in the hierarchy build's layout on the GPU.
+    CpuAndGrid,
+    /// Only on the GPU in the build's layout, with their bounds
+    /// ([`resident::keep_held`]); the set comes back empty, its [`VplSet::kept`] their
+    /// number.
+    Grid,
+}
+
+/// [`generate_vpls`] for `(target, bounces, seed)`, with the VPLs where `want` says: with
+/// [`Want::CpuAndGrid`] the VPLs in the build's layout are returned beside the set; with
+/// [`Want::Grid`] they are kept ([`resident::keep_held`]) and none is read back.
 fn generate<'c>(
     ctx: &'c GpuContext,
     world: &World,
     (target, bounces, seed): (usize, u32, u64),
-    for_grid: bool,
+    want: Want,
 ) -> Result<(VplSet, Option<Lease<'c>>), GpuError> {
     let Some(table) = tables::tables(world).filter(|_| target > 0 && bounces > 0) else {
         return Ok((VplSet::default(), None));
@@ -217,7 +231,7 @@ fn generate<'c>(
     }
     let scale = 1.0 / paths.max(1) as f32;
     let mut batch = Batch::new(ctx);
-    let grid_in = if for_grid && done > 0 {
+    let grid_in = if want != Want::Cpu && done > 0 {
         let lights = ctx.lease(
             crate::grid::LIGHTS_IN,
             done * crate::grid::LIGHT_BYTES,
@@ -231,23 +245,92 @@ fn generate<'c>(
                 pad: [0; 2],
             },
         );
+        // lo, hi (as order-preserving bits) and the first invalid index (shaders/vpl_grid.wgsl).
+        let max = u32::MAX;
+        let bounds = ctx.upload("vpl bounds", &[max, max, max, 0, 0, 0, max, 0])?;
         let kernel = ctx.pipeline("vpl grid", || grid_src);
         let bind = ctx.bind_group(
             &kernel,
-            vec![params.as_entire_binding(), out.binding(), lights.binding()],
+            vec![
+                params.as_entire_binding(),
+                out.binding(),
+                lights.binding(),
+                bounds.binding(),
+            ],
         );
         batch.dispatch("vpl grid", &kernel, &bind, done as usize)?;
+        if want == Want::Grid {
+            batch.read(bounds.buffer(), 32)?;
+        }
+        batch.keep(bounds);
         Some(lights)
     } else {
         None
     };
+    if want == Want::Grid {
+        let (reads, _) = batch.finish()?;
+        let words: &[u32] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
+        let Some(lights) = grid_in else {
+            // No VPL.
+            let set = VplSet {
+                paths,
+                ..VplSet::default()
+            };
+            return Ok((set, None));
+        };
+        let held = resident::Held::new(done as usize, held_bounds(words), scale);
+        resident::keep_held(ctx, lights, out, held);
+        let set = VplSet {
+            vpls: Vpls::default(),
+            paths,
+            kept: done as usize,
+        };
+        return Ok((set, None));
+    }
     batch.read(out.buffer(), (done.max(1)) * VPL_BYTES)?;
     let (reads, _) = batch.finish()?;
-    let records: &[[Vec4; 3]] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
-    // The planes in parallel (a million VPLs), the flux scaled as `Vpls::scale_flux` does.
-    let records = &records[..(done as usize).min(records.len())];
+    let vpls = unpack(
+        reads.first().map_or(&[], |r| bytemuck::cast_slice(r)),
+        done as usize,
+        scale,
+    );
+    Ok((
+        VplSet {
+            vpls,
+            paths,
+            kept: 0,
+        },
+        grid_in,
+    ))
+}
+
+/// The bounds (lo, hi) of `shaders/vpl_grid.wgsl`'s first seven words (as
+/// order-preserving bits, then the first invalid index), or the index of the first invalid
+/// VPL.
+fn held_bounds(words: &[u32]) -> Result<(glam::Vec3, glam::Vec3), usize> {
+    let float = |b: u32| {
+        f32::from_bits(if b & 0x8000_0000 != 0 {
+            b & 0x7fff_ffff
+        } else {
+            !b
+        })
+    };
+    match *words {
+        [a, b, c, d, e, f, bad, ..] if bad == u32::MAX => Ok((
+            glam::Vec3::new(float(a), float(b), float(c)),
+            glam::Vec3::new(float(d), float(e), float(f)),
+        )),
+        [_, _, _, _, _, _, bad, ..] => Err(bad as usize),
+        _ => Err(0),
+    }
+}
+
+/// `count` VPLs as the light-path kernel writes them (three `vec4`s each), the flux scaled
+/// by `scale` as `Vpls::scale_flux` does, into planes (in parallel: a million VPLs).
+fn unpack(records: &[[Vec4; 3]], count: usize, scale: f32) -> Vpls {
+    let records = &records[..count.min(records.len())];
     let plane = |f: &(dyn Fn(&[Vec4; 3]) -> glam::Vec3 + Sync)| records.par_iter().map(f).collect();
-    let vpls = Vpls {
+    Vpls {
         positions: plane(&|r| r[0].truncate()),
         normals: plane(&|r| r[1].truncate()),
         flux: plane(&|r| {
@@ -255,8 +338,34 @@ fn generate<'c>(
             f *= scale;
             f
         }),
-    };
-    Ok((VplSet { vpls, paths }, grid_in))
+    }
+}
+
+/// The VPLs of a frame that kept them on the GPU without reading them back
+/// ([`VplSet::kept`], `count` of them), read back after all, for a frame that has to be
+/// made with them on the CPU: from the light-path kernel's records where this thread's
+/// are still kept, else traced again (the same set: the light paths are deterministic).
+///
+/// # Errors
+/// The GPU failed.
+pub(crate) fn read_back_kept(
+    ctx: &GpuContext,
+    world: &World,
+    s: &lgh_render::RenderSettings,
+    count: usize,
+) -> Result<Vpls, GpuError> {
+    if let Some((records, scale)) = resident::take_records(ctx, count) {
+        let mut batch = Batch::new(ctx);
+        batch.read(records.buffer(), (count.max(1) as u64) * VPL_BYTES)?;
+        let (reads, _) = batch.finish()?;
+        return Ok(unpack(
+            reads.first().map_or(&[], |r| bytemuck::cast_slice(r)),
+            count,
+            scale,
+        ));
+    }
+    let (set, _) = generate(ctx, world, (s.vpls, s.bounces, s.seed), Want::Cpu)?;
+    Ok(set.vpls)
 }
 
 /// [`generate_vpls`] for a GPU method's
@@ -264,14 +373,16 @@ fn generate<'c>(
 /// `Ok(None)` (the CPU traces them) for independent random path numbers
 /// ([`PathNumbers::Random`]), or where the scene or the VPLs do not fit the adapter's
 /// buffers. With `for_grid` (a method that builds a hierarchy over them) the VPLs are also
-/// kept on the GPU for the build (the module `resident`).
+/// kept on the GPU for the build (the module `resident`); with `only_grid` as well (a frame
+/// whose every pass after the VPLs runs on the GPU) they are not read back
+/// ([`lgh_render::passes::vpl_gen::VplSet::kept`]).
 ///
 /// # Errors
 /// No adapter, or the GPU failed.
 pub fn method_vpls(
     world: &World,
     s: &lgh_render::RenderSettings,
-    for_grid: bool,
+    (for_grid, only_grid): (bool, bool),
 ) -> Result<Option<VplSet>, lgh_render::settings::RenderError> {
     let fail = |e: GpuError| lgh_render::settings::RenderError::Backend(e.to_string());
     let ctx = GpuContext::shared().map_err(fail)?;
@@ -279,7 +390,12 @@ pub fn method_vpls(
     if s.path_numbers != PathNumbers::Sobol {
         return Ok(None);
     }
-    match generate(ctx, world, (s.vpls, s.bounces, s.seed), for_grid) {
+    let want = match (for_grid, only_grid) {
+        (true, true) => Want::Grid,
+        (true, false) => Want::CpuAndGrid,
+        _ => Want::Cpu,
+    };
+    match generate(ctx, world, (s.vpls, s.bounces, s.seed), want) {
         Ok((set, lights)) => {
             if let Some(lights) = lights {
                 resident::keep(ctx, resident::Key::of(&set.vpls.as_input()), lights);
@@ -288,5 +404,54 @@ pub fn method_vpls(
         }
         Err(GpuError::TooLarge(_)) => Ok(None),
         Err(e) => Err(fail(e)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::held_bounds;
+    use glam::Vec3;
+
+    /// `shaders/vpl_grid.wgsl`'s `ordered`: the float's bits as an unsigned number of the
+    /// same order.
+    fn ordered(x: f32) -> u32 {
+        let b = x.to_bits();
+        if b & 0x8000_0000 != 0 {
+            !b
+        } else {
+            b | 0x8000_0000
+        }
+    }
+
+    /// The order-preserving bits decode to the floats, their order is the floats' (so that
+    /// atomic min and max of the bits are those of the floats), and an invalid index is
+    /// reported as such.
+    #[test]
+    fn the_bounds_decode_from_order_preserving_bits() {
+        let xs = [-3.5e7f32, -2.0, -1e-30, -0.0, 0.0, 1e-30, 0.75, 4.0e9];
+        for w in xs.windows(2) {
+            assert!(ordered(w[0]) <= ordered(w[1]), "{w:?}");
+        }
+        let (lo, hi) = (Vec3::new(-2.0, -0.0, 1e-30), Vec3::new(0.75, 4.0e9, 3.0));
+        let words = [
+            ordered(lo.x),
+            ordered(lo.y),
+            ordered(lo.z),
+            ordered(hi.x),
+            ordered(hi.y),
+            ordered(hi.z),
+            u32::MAX,
+            0,
+        ];
+        let (a, b) = held_bounds(&words).expect("valid");
+        assert_eq!(
+            a.to_array().map(f32::to_bits),
+            lo.to_array().map(f32::to_bits)
+        );
+        assert_eq!(b, hi);
+        let mut bad = words;
+        bad[6] = 17;
+        assert_eq!(held_bounds(&bad), Err(17));
+        assert_eq!(held_bounds(&[]), Err(0));
     }
 }

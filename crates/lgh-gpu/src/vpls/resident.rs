@@ -8,8 +8,18 @@
 //! ([`super::method_vpls`], which first drops whatever an earlier frame left), and the
 //! build takes them (whether it uses them or not), so they never outlive the frame that
 //! made them into another's.
+//!
+//! A frame whose every pass after the VPLs runs on the GPU does not read them back at all
+//! ([`Held`]): the CPU gets their number (the frame's
+//! [`VplSet::kept`](lgh_render::passes::vpl_gen::VplSet::kept)), and the build their
+//! bounds, found on the GPU, through
+//! [`HierarchyBuilder::build_held`](lgh_core::lighting_grid::HierarchyBuilder::build_held).
+//! The VPLs as the light-path kernel wrote them
+//! stay too, for a frame that has to be made again with its grids on the CPU
+//! ([`take_records`]).
 
-use std::sync::PoisonError;
+use std::sync::{Mutex, PoisonError};
+use std::thread::ThreadId;
 
 use glam::Vec3;
 use lgh_core::lighting_grid::InputLights;
@@ -49,31 +59,127 @@ impl Key {
 /// Kept lights.
 #[derive(Debug)]
 pub(crate) struct Resident {
-    key: Key,
-    lights: Detached,
+    /// The read-back VPLs they stand for; `None` where none were read back ([`Held`]).
+    key: Option<Key>,
+    lights: Option<Detached>,
+    held: Option<Held>,
+}
+
+/// What is kept of VPLs that were not read back.
+#[derive(Debug)]
+pub(crate) struct Held {
+    /// Their number.
+    pub(crate) count: usize,
+    /// Their bounds (lo, hi), or the index of the first invalid one (as
+    /// [`lighting_grid::bounds`](lgh_core::lighting_grid::bounds) finds them).
+    pub(crate) bounds: Result<(Vec3, Vec3), usize>,
+    /// The factor of their fluxes (one over the number of light paths).
+    pub(crate) scale: f32,
+    /// The VPLs as the light-path kernel wrote them (48 bytes each, flux not yet scaled).
+    records: Option<Detached>,
+}
+
+/// The kept VPLs of each thread that renders a frame (a frame makes its VPLs and builds
+/// its hierarchies on one thread, and frames may run on several threads at once).
+#[derive(Debug, Default)]
+pub(crate) struct Slots(Mutex<Vec<(ThreadId, Resident)>>);
+
+/// The most threads whose VPLs are kept at once (the oldest go first).
+const MAX_SLOTS: usize = 8;
+
+impl Slots {
+    /// Runs `f` on this thread's slot.
+    fn with<T>(&self, f: impl FnOnce(&mut Option<Resident>) -> T) -> T {
+        let mut all = self.0.lock().unwrap_or_else(PoisonError::into_inner);
+        let me = std::thread::current().id();
+        let at = all.iter().position(|(t, _)| *t == me);
+        let mut mine = at.map(|i| all.remove(i).1);
+        let out = f(&mut mine);
+        if let Some(r) = mine {
+            if all.len() >= MAX_SLOTS {
+                all.remove(0);
+            }
+            all.push((me, r));
+        }
+        out
+    }
 }
 
 /// Keeps `lights` (the build's layout) for the VPLs of `key`.
 pub(crate) fn keep(ctx: &GpuContext, key: Key, lights: Lease<'_>) {
-    *slot(ctx) = Some(Resident {
-        key,
-        lights: lights.detach(),
-    });
+    let r = Resident {
+        key: Some(key),
+        lights: Some(lights.detach()),
+        held: None,
+    };
+    ctx.resident_vpls().with(|slot| *slot = Some(r));
 }
 
-/// Drops the kept lights, if any.
+/// Keeps `lights` (the build's layout) and `records` (the light-path kernel's) of VPLs that
+/// were not read back, with what `held` says of them.
+pub(crate) fn keep_held(ctx: &GpuContext, lights: Lease<'_>, records: Lease<'_>, mut held: Held) {
+    held.records = Some(records.detach());
+    let r = Resident {
+        key: None,
+        lights: Some(lights.detach()),
+        held: Some(held),
+    };
+    ctx.resident_vpls().with(|slot| *slot = Some(r));
+}
+
+impl Held {
+    /// What is known of `count` VPLs not read back, their flux scaled by `scale`.
+    pub(crate) fn new(count: usize, bounds: Result<(Vec3, Vec3), usize>, scale: f32) -> Self {
+        Self {
+            count,
+            bounds,
+            scale,
+            records: None,
+        }
+    }
+}
+
+/// Drops this thread's kept lights, if any.
 pub(crate) fn clear(ctx: &GpuContext) {
-    *slot(ctx) = None;
+    ctx.resident_vpls().with(|slot| *slot = None);
 }
 
-/// The kept lights if they are `lights`; the kept ones are dropped either way.
+/// This thread's kept lights if they are `lights`; the kept ones are dropped either way.
 pub(crate) fn take<'c>(ctx: &'c GpuContext, lights: &InputLights) -> Option<Lease<'c>> {
-    let kept = slot(ctx).take()?;
-    (kept.key == Key::of(lights)).then(|| ctx.attach(kept.lights))
+    let kept = ctx.resident_vpls().with(Option::take)?;
+    (kept.key == Some(Key::of(lights)))
+        .then_some(kept.lights)
+        .flatten()
+        .map(|l| ctx.attach(l))
 }
 
-fn slot(ctx: &GpuContext) -> std::sync::MutexGuard<'_, Option<Resident>> {
-    ctx.resident_vpls()
-        .lock()
-        .unwrap_or_else(PoisonError::into_inner)
+/// This thread's kept lights of `count` VPLs that were not read back, with what is known
+/// of them; whatever else is kept is dropped (their records stay, for [`take_records`]).
+pub(crate) fn take_held(ctx: &GpuContext, count: usize) -> Option<(Lease<'_>, Held)> {
+    let (lights, held) = ctx.resident_vpls().with(|slot| {
+        let found = slot.as_ref().is_some_and(|k| {
+            k.lights.is_some() && k.held.as_ref().is_some_and(|h| h.count == count)
+        });
+        if !found {
+            *slot = None;
+            return None;
+        }
+        let kept = slot.as_mut()?;
+        let held = kept.held.as_ref()?;
+        Some((
+            kept.lights.take()?,
+            Held::new(held.count, held.bounds, held.scale),
+        ))
+    })?;
+    Some((ctx.attach(lights), held))
+}
+
+/// This thread's light-path records of `count` VPLs that were not read back, and their flux
+/// scale, for a frame that reads them back after all; they are dropped from the slot.
+pub(crate) fn take_records(ctx: &GpuContext, count: usize) -> Option<(Lease<'_>, f32)> {
+    let (records, scale) = ctx.resident_vpls().with(|slot| {
+        let held = slot.as_mut()?.held.as_mut().filter(|h| h.count == count)?;
+        Some((held.records.take()?, held.scale))
+    })?;
+    Some((ctx.attach(records), scale))
 }

@@ -67,8 +67,12 @@ pub struct MethodInputs<'a> {
     pub gbuffer: &'a GBuffer,
     /// The camera the G-buffer was rendered with.
     pub camera: &'a CameraFrame,
-    /// The frame's VPLs (empty for methods that do not use them).
+    /// The frame's VPLs (empty for methods that do not use them, and where the method's
+    /// backend keeps them on its device: `vpl_count` says how many there are).
     pub vpls: &'a Vpls,
+    /// How many VPLs the frame has: `vpls.len()`, or where the method's backend keeps
+    /// them ([`crate::passes::vpl_gen::VplSet::kept`]) their number.
+    pub vpl_count: usize,
     /// All settings of the frame; a method reads the part that is its own.
     pub settings: &'a RenderSettings,
     /// Progress of long passes.
@@ -81,7 +85,7 @@ impl MethodInputs<'_> {
     /// [`RenderSettings::vpl_clamp`] and N the frame's VPLs.
     #[must_use]
     pub fn eps(&self) -> f32 {
-        clamp_eps(self.settings, self.vpls.len(), self.world.radius)
+        clamp_eps(self.settings, self.vpl_count, self.world.radius)
     }
 }
 
@@ -189,7 +193,10 @@ pub trait IndirectMethod: Sync + Send {
     }
     /// The frame's VPLs (`generate_vpls(world, s.vpls, s.bounces, s.seed,
     /// s.path_numbers)`'s set) generated on this method's own backend, or `Ok(None)`, the
-    /// default, for the CPU's pass. lgh-gpu's methods trace the light paths on the GPU.
+    /// default, for the CPU's pass. lgh-gpu's methods trace the light paths on the GPU; a
+    /// method whose every later pass runs there may keep them there
+    /// ([`crate::passes::vpl_gen::VplSet::kept`]): its [`IndirectMethod::render`] then
+    /// gets an empty [`MethodInputs::vpls`].
     ///
     /// # Errors
     /// The backend failed.

@@ -47,10 +47,30 @@ pub enum PathNumbers {
 /// The VPLs of one frame and how many light paths made them.
 #[derive(Clone, Debug, Default)]
 pub struct VplSet {
-    /// The VPLs, fluxes already divided by `paths`.
+    /// The VPLs, fluxes already divided by `paths`; empty where a backend keeps them
+    /// (`kept`).
     pub vpls: Vpls,
     /// Number of light paths traced (M).
     pub paths: u64,
+    /// The VPLs a method's backend made and keeps on its device without a copy here
+    /// (`vpls` is then empty): a GPU frame whose every pass after the VPLs runs on the GPU
+    /// needs none on the CPU ([`crate::methods::IndirectMethod::generate_vpls`]). Zero
+    /// otherwise.
+    pub kept: usize,
+}
+
+impl VplSet {
+    /// The number of VPLs, here or kept on a device.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.vpls.len().max(self.kept)
+    }
+
+    /// Whether there is no VPL, here or on a device.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
 }
 
 /// The seed of the Sobol point set of the light paths of frame seed `seed`
@@ -89,7 +109,11 @@ pub fn generate_vpls(
     let max_paths = max_paths(target);
     let mut paths = 0u64;
     if target == 0 || bounces == 0 || world.lights.emits_nothing() {
-        return VplSet { vpls, paths };
+        return VplSet {
+            vpls,
+            paths,
+            kept: 0,
+        };
     }
     let sobol_seed = path_seed(seed);
     let path = |k: u64, out: &mut Vpls| match numbers {
@@ -144,7 +168,11 @@ pub fn generate_vpls(
         }
     }
     vpls.scale_flux(1.0 / paths as f32);
-    VplSet { vpls, paths }
+    VplSet {
+        vpls,
+        paths,
+        kept: 0,
+    }
 }
 
 /// One light path: appends the VPL (position, normal, unnormalised flux) of each diffuse

@@ -204,7 +204,8 @@ impl ShadeLights {
         );
     }
 
-    /// Keeps what the unbiased estimate needs of `grid` (built from `vpls` by restriction or
+    /// Keeps what the unbiased estimate needs of `grid` (built from `vpls`, `count` of them
+    /// (`vpls` is empty where the builder's device keeps them), by restriction or
     /// all-scatter; `None` where its builder keeps it on its device, of shape `shape`),
     /// whose lights [`ShadeLights::add_hierarchy`] added from index `first` with levels
     /// `levels`: the representatives of its S_1 lights (drawn with `seed`, or `drawn`
@@ -215,7 +216,7 @@ impl ShadeLights {
     pub(super) fn add_unbiased(
         &mut self,
         (grid, shape): (Option<&LightingGrid>, &GridShape),
-        vpls: &Vpls,
+        (vpls, count): (&Vpls, usize),
         levels: ShadedLevels,
         (seed, drawn): (u64, Option<&[[u32; SLOTS]]>),
         first: usize,
@@ -250,7 +251,7 @@ impl ShadeLights {
             }
             _ => Descent::default(),
         };
-        let vpl_lights = if levels.lowest == 0 { vpls.len() } else { 0 };
+        let vpl_lights = if levels.lowest == 0 { count } else { 0 };
         self.hierarchies.push(Hierarchy {
             reps,
             partition: grid
@@ -261,7 +262,7 @@ impl ShadeLights {
             grid_base: first + vpl_lights,
             tables: tables.then(|| match grid {
                 Some(grid) => GridTables::new(grid, levels, slots.into_iter(), vpls, keeps),
-                None => GridTables::on_device(shape, levels, vpls.len()),
+                None => GridTables::on_device(shape, levels, count),
             }),
         });
     }

@@ -153,7 +153,10 @@ impl LghFrame {
     /// The VPLs cannot form a hierarchy (non-finite values); or the builder kept a grid on
     /// its device ([`HierarchyBuilder::shape`]) where the frame needs it on the CPU (without
     /// `tables`, without the unbiased estimate's shadow samples, with one level shown
-    /// alone, or with some grids on the CPU and some not): [`GridError::KeptOnDevice`].
+    /// alone, or with some grids on the CPU and some not), or the VPLs are kept on the
+    /// builder's device ([`MethodInputs::vpls`] empty, [`MethodInputs::vpl_count`] not) where
+    /// the frame needs them here (normal bins, or a grid read back):
+    /// [`GridError::KeptOnDevice`].
     pub fn prepare_with(
         inputs: &MethodInputs,
         shadowed: bool,
@@ -187,7 +190,7 @@ impl LghFrame {
             hierarchy_device: "none",
             ..LghStats::default()
         };
-        if vpls.is_empty() {
+        if inputs.vpl_count == 0 {
             return Ok(Prepared::Dark(MethodOutput {
                 radiance: par_filled(n_px, Vec3::ZERO),
                 lights_per_pixel: Some(par_filled(n_px, 0)),
@@ -195,7 +198,12 @@ impl LghFrame {
                 ..MethodOutput::default()
             }));
         }
-        // One hierarchy, or one per dominant normal direction (--normal-bins).
+        // One hierarchy, or one per dominant normal direction (--normal-bins); where the
+        // builder's device keeps the VPLs (none here), one of them all, built there.
+        let held = vpls.is_empty();
+        if held && settings.normal_bins {
+            return Err(GridError::KeptOnDevice);
+        }
         let split;
         let groups: Vec<&Vpls> = if settings.normal_bins {
             split = split_by_normal(vpls);
@@ -211,10 +219,14 @@ impl LghFrame {
         // A builder that can draw the S_1 representatives with the build (a GPU's) does.
         let draw = k > 0 && unbiased && settings.shadow_target == ShadowTarget::Representative;
         builder.draw_representatives(draw.then_some(seed));
-        for group in groups.iter().filter(|g| !g.is_empty()) {
-            let input = group.as_input();
+        for group in groups.iter().filter(|g| held || !g.is_empty()) {
+            let count = if held { inputs.vpl_count } else { group.len() };
             let start = Instant::now();
-            builder.build(&input, settings.levels, settings.construction)?;
+            if held {
+                builder.build_held(count, settings.levels, settings.construction)?;
+            } else {
+                builder.build(&group.as_input(), settings.levels, settings.construction)?;
+            }
             build_ms += start.elapsed().as_secs_f64() * 1e3;
             let Some(shape) = builder.shape() else {
                 continue;
@@ -236,13 +248,17 @@ impl LghFrame {
             if grid.is_none() && !(on_device && draw && settings.only_level.is_none()) {
                 return Err(GridError::KeptOnDevice);
             }
+            // A grid on the CPU needs its VPLs here too (S_0, its representatives).
+            if held && grid.is_some() {
+                return Err(GridError::KeptOnDevice);
+            }
             let first = lights.len();
             match grid {
                 Some(grid) => {
                     let (alpha, emission) = (settings.alpha, settings.emission);
                     lights.add_hierarchy(grid, group, lowest, alpha, emission, n2)?;
                 }
-                None => lights.add_on_device(&shape, group.len(), lowest)?,
+                None => lights.add_on_device(&shape, count, lowest)?,
             }
             lighting_ms += start.elapsed().as_secs_f64() * 1e3;
             if k > 0 && settings.shadow_target == ShadowTarget::Representative {
@@ -256,7 +272,7 @@ impl LghFrame {
                     let reps = (seed, drawn);
                     lights.add_unbiased(
                         (grid, &shape),
-                        group,
+                        (group, count),
                         levels,
                         reps,
                         first,
