@@ -192,6 +192,10 @@ fn frame(
     };
     let hierarchies = builder.take_held();
     drop(builder);
+    #[cfg(test)]
+    if resident && tests::AGAIN.with(std::cell::Cell::get) {
+        return Err(Attempt::Again);
+    }
     let mut frame = match prepared {
         Prepared::Dark(output) => return Ok(output),
         Prepared::Frame(frame) => frame,
@@ -484,10 +488,18 @@ mod tests {
     use crate::lgh::testing::{FrameInputs, cornell, cornell_and_two_rooms};
     use lgh_render::RenderSettings;
 
+    thread_local! {
+        /// Makes this thread's GPU frames with grids kept on the GPU end in
+        /// [`Attempt::Again`] once their hierarchies are built, as a step that cannot run
+        /// on the GPU (lists past its binning, a table past its buffers) ends them.
+        pub(super) static AGAIN: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+
     /// A frame whose VPLs stay on the GPU, never read back, is the frame of the same VPLs
     /// read back, pixel for pixel: at the viewer's settings (S_1 lowest, and S_0 too), and
     /// where the frame has to be made with its grids on the CPU after all (one level shown
-    /// alone), from the kept light-path records or, where those are gone, traced again.
+    /// alone; a step that ends the frame on the GPU after its builds), from the kept
+    /// light-path records or, where those are gone, traced again.
     #[test]
     #[cfg_attr(
         not(gpu_adapter),
@@ -555,6 +567,15 @@ mod tests {
                 assert!(!b.1, "the grids stayed on the GPU");
                 // Not read back: the light-path records are still kept.
                 assert!(crate::vpls::resident::take_records(ctx, n).is_some());
+                // Ended after its builds: made again with its grids and VPLs on the CPU.
+                AGAIN.with(|a| a.set(true));
+                let (again, _, _) = kept(&s, true);
+                AGAIN.with(|a| a.set(false));
+                assert!(
+                    a.0 == again.0,
+                    "start level {start_level}: made again, another image"
+                );
+                assert!(again.1, "made again with the grids on the CPU");
                 // Made again with the grids on the CPU: the kept VPLs are read back.
                 s.lgh.only_level = Some(2);
                 let (a, _, _) = read(&s);
