@@ -389,13 +389,11 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
         self.fallback = None;
         self.passes.clear();
         let held = crate::vpls::resident::take_held(self.ctx, count);
-        let Some((lights, held)) = held.filter(|_| construction != Construction::GatherFromS1)
+        let Some((lights, bounds)) = held.filter(|_| construction != Construction::GatherFromS1)
         else {
             return Err(GridError::KeptOnDevice);
         };
-        let bounds = held
-            .bounds
-            .map_err(|index| GridError::InvalidLight { index })?;
+        let bounds = bounds.map_err(|index| GridError::InvalidLight { index })?;
         if count == 0 {
             return Err(GridError::Empty);
         }

@@ -307,7 +307,7 @@ fn generate<'c>(
 /// The bounds (lo, hi) of `shaders/vpl_grid.wgsl`'s first seven words (as
 /// order-preserving bits, then the first invalid index), or the index of the first invalid
 /// VPL.
-fn held_bounds(words: &[u32]) -> Result<(glam::Vec3, glam::Vec3), usize> {
+fn held_bounds(words: &[u32]) -> resident::Bounds {
     let float = |b: u32| {
         f32::from_bits(if b & 0x8000_0000 != 0 {
             b & 0x7fff_ffff

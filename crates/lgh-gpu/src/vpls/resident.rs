@@ -65,6 +65,9 @@ pub(crate) struct Resident {
     held: Option<Held>,
 }
 
+/// The bounds (lo, hi) of kept VPLs, or the index of the first invalid one.
+pub(crate) type Bounds = Result<(Vec3, Vec3), usize>;
+
 /// What is kept of VPLs that were not read back.
 #[derive(Debug)]
 pub(crate) struct Held {
@@ -72,7 +75,7 @@ pub(crate) struct Held {
     pub(crate) count: usize,
     /// Their bounds (lo, hi), or the index of the first invalid one (as
     /// [`lighting_grid::bounds`](lgh_core::lighting_grid::bounds) finds them).
-    pub(crate) bounds: Result<(Vec3, Vec3), usize>,
+    pub(crate) bounds: Bounds,
     /// The factor of their fluxes (one over the number of light paths).
     pub(crate) scale: f32,
     /// The VPLs as the light-path kernel wrote them (48 bytes each, flux not yet scaled).
@@ -129,7 +132,7 @@ pub(crate) fn keep_held(ctx: &GpuContext, lights: Lease<'_>, records: Lease<'_>,
 
 impl Held {
     /// What is known of `count` VPLs not read back, their flux scaled by `scale`.
-    pub(crate) fn new(count: usize, bounds: Result<(Vec3, Vec3), usize>, scale: f32) -> Self {
+    pub(crate) fn new(count: usize, bounds: Bounds, scale: f32) -> Self {
         Self {
             count,
             bounds,
@@ -153,10 +156,11 @@ pub(crate) fn take<'c>(ctx: &'c GpuContext, lights: &InputLights) -> Option<Leas
         .map(|l| ctx.attach(l))
 }
 
-/// This thread's kept lights of `count` VPLs that were not read back, with what is known
-/// of them; whatever else is kept is dropped (their records stay, for [`take_records`]).
-pub(crate) fn take_held(ctx: &GpuContext, count: usize) -> Option<(Lease<'_>, Held)> {
-    let (lights, held) = ctx.resident_vpls().with(|slot| {
+/// This thread's kept lights of `count` VPLs that were not read back, with their bounds
+/// (or the first invalid one, [`Held::bounds`]); whatever else is kept is dropped (their
+/// records stay, for [`take_records`]).
+pub(crate) fn take_held(ctx: &GpuContext, count: usize) -> Option<(Lease<'_>, Bounds)> {
+    let (lights, bounds) = ctx.resident_vpls().with(|slot| {
         let found = slot.as_ref().is_some_and(|k| {
             k.lights.is_some() && k.held.as_ref().is_some_and(|h| h.count == count)
         });
@@ -165,13 +169,10 @@ pub(crate) fn take_held(ctx: &GpuContext, count: usize) -> Option<(Lease<'_>, He
             return None;
         }
         let kept = slot.as_mut()?;
-        let held = kept.held.as_ref()?;
-        Some((
-            kept.lights.take()?,
-            Held::new(held.count, held.bounds, held.scale),
-        ))
+        let bounds = kept.held.as_ref()?.bounds;
+        Some((kept.lights.take()?, bounds))
     })?;
-    Some((ctx.attach(lights), held))
+    Some((ctx.attach(lights), bounds))
 }
 
 /// This thread's light-path records of `count` VPLs that were not read back, and their flux
