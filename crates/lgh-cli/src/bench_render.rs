@@ -130,6 +130,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
                 camera: &frame,
                 vpls: &set.vpls,
                 vpl_count: set.vpls.len(),
+                vpl_bins: None,
                 settings: &settings,
                 progress: &Silent,
             };

@@ -117,8 +117,20 @@ impl<'c> Batch<'c> {
     /// Records the copy of `bytes` of `from` (from byte `from_at`) into `to` (at byte
     /// `to_at`); offsets and size are multiples of 4.
     pub fn copy(&mut self, from: &Lease<'_>, from_at: u64, to: &Lease<'_>, to_at: u64, bytes: u64) {
+        self.copy_buffer(from.buffer(), from_at, to, to_at, bytes);
+    }
+
+    /// [`Batch::copy`] from a buffer that is not leased (kept beyond its frame).
+    pub(crate) fn copy_buffer(
+        &mut self,
+        from: &wgpu::Buffer,
+        from_at: u64,
+        to: &Lease<'_>,
+        to_at: u64,
+        bytes: u64,
+    ) {
         self.enc
-            .copy_buffer_to_buffer(from.buffer(), from_at, to.buffer(), to_at, bytes);
+            .copy_buffer_to_buffer(from, from_at, to.buffer(), to_at, bytes);
     }
 
     /// Records the zeroing of `buffer`.
@@ -147,6 +159,13 @@ impl<'c> Batch<'c> {
             .copy_buffer_to_buffer(from, 0, staging.buffer(), 0, bytes.next_multiple_of(4));
         self.reads.push(staging);
         Ok(())
+    }
+
+    /// Submits the batch without waiting for it, for work that only later submissions read
+    /// (the queue runs them in order): a batch without [`Batch::read`]s; its passes' times
+    /// are not kept.
+    pub fn submit(self) {
+        self.ctx.queue.submit([self.enc.finish()]);
     }
 
     /// Submits the batch and waits for it: the bytes of each [`Batch::read`] and the passes'

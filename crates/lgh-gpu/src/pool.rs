@@ -107,6 +107,13 @@ impl Lease<'_> {
     }
 }
 
+impl Detached {
+    /// The buffer.
+    pub(crate) fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+}
+
 impl GpuContext {
     /// `d` as a lease again.
     pub(crate) fn attach(&self, d: Detached) -> Lease<'_> {

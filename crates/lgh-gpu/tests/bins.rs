@@ -42,6 +42,7 @@ fn both(
         camera: &camera,
         vpls: &vpls.vpls,
         vpl_count: vpls.vpls.len(),
+        vpl_bins: None,
         settings: &s,
         progress: &Silent,
     };

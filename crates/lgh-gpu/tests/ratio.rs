@@ -36,6 +36,7 @@ fn compare(w: &World, s: &RenderSettings, shadowed: bool) -> f32 {
         camera: &camera,
         vpls: &vpls.vpls,
         vpl_count: vpls.vpls.len(),
+        vpl_bins: None,
         settings: s,
         progress: &Silent,
     };

@@ -195,11 +195,12 @@ fn vpls_kept_without_a_copy_build_the_grid_of_the_read_back_ones() {
         Some("test/colonnade.toml"),
     ] {
         let world = world(rel);
-        let s = lgh_render::RenderSettings {
+        let mut s = lgh_render::RenderSettings {
             vpls: 6_000,
             seed: 2,
             ..lgh_render::RenderSettings::default()
         };
+        s.lgh.normal_bins = false;
         let read = lgh_gpu::vpls::method_vpls(&world, &s, (true, false))
             .expect("gpu")
             .expect("vpls on the gpu");
@@ -226,20 +227,20 @@ fn vpls_kept_without_a_copy_build_the_grid_of_the_read_back_ones() {
         };
         let set = keep();
         let mut b = lgh_gpu::grid::GpuGridBuilder::new(ctx);
-        b.build_held(set.kept, LevelCount::Auto, Construction::Restrict)
+        b.build_held(0, set.kept, LevelCount::Auto, Construction::Restrict)
             .expect("build of the kept VPLs");
         assert_eq!(b.grid(), Some(&grid_of_read), "{rel:?}: another grid");
         assert!(b.keeps_lights());
         // Taken by that build.
         assert_eq!(
-            b.build_held(set.kept, LevelCount::Auto, Construction::Restrict)
+            b.build_held(0, set.kept, LevelCount::Auto, Construction::Restrict)
                 .unwrap_err(),
             GridError::KeptOnDevice
         );
         // Another count, another thread: not theirs.
         let set = keep();
         assert!(
-            b.build_held(set.kept + 1, LevelCount::Auto, Construction::Restrict)
+            b.build_held(0, set.kept + 1, LevelCount::Auto, Construction::Restrict)
                 .is_err()
         );
         let set = keep();
@@ -247,14 +248,95 @@ fn vpls_kept_without_a_copy_build_the_grid_of_the_read_back_ones() {
             scope
                 .spawn(|| {
                     let mut b = lgh_gpu::grid::GpuGridBuilder::new(ctx);
-                    let e = b.build_held(set.kept, LevelCount::Auto, Construction::Restrict);
+                    let e = b.build_held(0, set.kept, LevelCount::Auto, Construction::Restrict);
                     assert_eq!(e.unwrap_err(), GridError::KeptOnDevice);
                 })
                 .join()
                 .expect("thread");
         });
-        b.build_held(set.kept, LevelCount::Auto, Construction::Restrict)
+        b.build_held(0, set.kept, LevelCount::Auto, Construction::Restrict)
             .expect("still kept for this thread");
         assert_eq!(b.grid(), Some(&grid_of_read));
+    }
+}
+
+/// VPLs kept on the GPU for a frame with one hierarchy per normal bin: split there as the
+/// CPU splits the read-back VPLs (each bin's number, and each bin's VPLs in order: the grid
+/// of every bin, built from the kept part, equals the grid of the CPU's bin), whichever
+/// order the parts are built in; a part taken after the last one with lights is gone.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn vpls_kept_in_normal_bins_build_the_grids_of_the_read_back_bins() {
+    use lgh_core::lighting_grid::{Construction, GridError, HierarchyBuilder, LevelCount};
+    use lgh_render::methods::lgh::{NORMAL_BINS, normal_bin};
+    let ctx = lgh_gpu::GpuContext::shared().expect("an adapter");
+    for (rel, vpls) in [
+        (None, 5_000),
+        (Some("test/clutter.toml"), 7_000),
+        (Some("test/colonnade.toml"), 3_000),
+    ] {
+        let world = world(rel);
+        let s = lgh_render::RenderSettings {
+            vpls,
+            seed: 3,
+            ..lgh_render::RenderSettings::default()
+        };
+        assert!(s.lgh.normal_bins);
+        let read = lgh_gpu::vpls::method_vpls(&world, &s, (true, false))
+            .expect("gpu")
+            .expect("vpls on the gpu");
+        let mut bins = vec![lgh_core::vpl::Vpls::default(); NORMAL_BINS];
+        for i in 0..read.vpls.len() {
+            let n = read.vpls.normals[i];
+            bins[normal_bin(n)].push(read.vpls.positions[i], n, read.vpls.flux[i]);
+        }
+        assert!(
+            bins.iter().filter(|b| !b.is_empty()).count() >= 3,
+            "{rel:?}: too few bins to test"
+        );
+        let grids: Vec<_> = bins
+            .iter()
+            .map(|bin| {
+                (!bin.is_empty()).then(|| {
+                    let mut b = lgh_gpu::grid::GpuGridBuilder::new(ctx);
+                    b.build(&bin.as_input(), LevelCount::Auto, Construction::Restrict)
+                        .expect("build");
+                    b.grid().expect("grid").clone()
+                })
+            })
+            .collect();
+        let set = lgh_gpu::vpls::method_vpls(&world, &s, (true, true))
+            .expect("gpu")
+            .expect("vpls on the gpu");
+        assert!(set.vpls.is_empty(), "{rel:?}: read back");
+        let counts: [usize; NORMAL_BINS] = std::array::from_fn(|b| bins[b].len());
+        assert_eq!(set.kept_bins, Some(counts), "{rel:?}");
+        assert_eq!(set.kept, read.vpls.len());
+        // The parts last to first but the last with lights, then that one.
+        let last = (0..NORMAL_BINS)
+            .rev()
+            .find(|&b| counts[b] > 0)
+            .expect("a bin");
+        let order = (0..last).rev().chain([last]);
+        let mut b = lgh_gpu::grid::GpuGridBuilder::new(ctx);
+        for bin in order.filter(|&b| counts[b] > 0) {
+            b.build_held(bin, counts[bin], LevelCount::Auto, Construction::Restrict)
+                .expect("build of a kept bin");
+            assert_eq!(b.grid(), grids[bin].as_ref(), "{rel:?}: bin {bin}");
+        }
+        let first = (0..NORMAL_BINS).find(|&b| counts[b] > 0).expect("a bin");
+        assert_eq!(
+            b.build_held(
+                first,
+                counts[first],
+                LevelCount::Auto,
+                Construction::Restrict
+            )
+            .unwrap_err(),
+            GridError::KeptOnDevice
+        );
     }
 }

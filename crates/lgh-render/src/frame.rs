@@ -188,6 +188,7 @@ pub fn render_frame_with(
         camera: &camera,
         vpls: &vpls.vpls,
         vpl_count: vpls.len(),
+        vpl_bins: vpls.kept_bins,
         settings: s,
         progress,
     };

@@ -417,20 +417,23 @@ pub trait HierarchyBuilder: Send {
         construction: Construction,
     ) -> Result<BuildTimings, GridError>;
 
-    /// Builds the hierarchy of the `count` lights the builder's device already holds (a
-    /// GPU's: the frame's VPLs, made there and not read back), as [`HierarchyBuilder::build`]
-    /// builds it of the same lights.
+    /// Builds the hierarchy of lights the builder's device already holds (a GPU's: the
+    /// frame's VPLs, made there and not read back), as [`HierarchyBuilder::build`] builds
+    /// it of the same lights: part `part` of them, of `count` lights, where the device split
+    /// them (by dominant normal direction: one part per normal bin, in the bins' order), or
+    /// part 0 for all of them.
     ///
     /// # Errors
     /// The builder holds no such lights (the default: none does),
     /// [`GridError::KeptOnDevice`]; or a light is invalid, as in `build`.
     fn build_held(
         &mut self,
+        part: usize,
         count: usize,
         levels: LevelCount,
         construction: Construction,
     ) -> Result<BuildTimings, GridError> {
-        let _ = (count, levels, construction);
+        let _ = (part, count, levels, construction);
         Err(GridError::KeptOnDevice)
     }
 

@@ -382,13 +382,14 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
 
     fn build_held(
         &mut self,
+        part: usize,
         count: usize,
         levels: LevelCount,
         construction: Construction,
     ) -> Result<BuildTimings, GridError> {
         self.fallback = None;
         self.passes.clear();
-        let held = crate::vpls::resident::take_held(self.ctx, count);
+        let held = crate::vpls::resident::take_held(self.ctx, part, count);
         let Some((lights, bounds)) = held.filter(|_| construction != Construction::GatherFromS1)
         else {
             return Err(GridError::KeptOnDevice);

@@ -122,6 +122,7 @@ impl IndirectMethod for GpuLgh {
             &MethodInputs {
                 vpls: &read,
                 vpl_count: read.len(),
+                vpl_bins: None,
                 ..*inputs
             }
         } else {
@@ -140,7 +141,7 @@ impl IndirectMethod for GpuLgh {
 impl GpuLgh {
     /// Where the frame's VPLs go: kept on the GPU for the hierarchy build, and where the
     /// frame's every later pass runs on the GPU (shadow samples with lgh's default
-    /// estimate, one hierarchy, every level shown, a construction the GPU builds) not read
+    /// estimate, every level shown, a construction the GPU builds) not read
     /// back at all. Where the frame has to be made with its grids on the CPU after all
     /// ([`Attempt::Again`]), they are read back then.
     fn vpl_places(&self, s: &lgh_render::RenderSettings) -> (bool, bool) {
@@ -148,7 +149,6 @@ impl GpuLgh {
         let only_grid = self.cpu == LGH
             && s.shadows.k(true, DEFAULT_SHADOW_SAMPLES) > 0
             && supported(l).is_ok()
-            && !l.normal_bins
             && l.only_level.is_none()
             && l.construction != lgh_core::lighting_grid::Construction::GatherFromS1;
         (true, only_grid)
@@ -496,7 +496,8 @@ mod tests {
     }
 
     /// A frame whose VPLs stay on the GPU, never read back, is the frame of the same VPLs
-    /// read back, pixel for pixel: at the viewer's settings (S_1 lowest, and S_0 too), and
+    /// read back, pixel for pixel: at the viewer's settings (S_1 lowest, and S_0 too; and
+    /// with one hierarchy per normal bin, the VPLs split on the GPU), and
     /// where the frame has to be made with its grids on the CPU after all (one level shown
     /// alone; a step that ends the frame on the GPU after its builds), from the kept
     /// light-path records or, where those are gone, traced again.
@@ -515,7 +516,7 @@ mod tests {
             (out.radiance.clone(), stats.expect("stats").grids_on_cpu)
         };
         for world in &cornell_and_two_rooms() {
-            for start_level in [1, 0] {
+            for (start_level, bins) in [(1, false), (0, false), (1, true)] {
                 let mut s = RenderSettings {
                     width: 48,
                     height: 27,
@@ -523,7 +524,7 @@ mod tests {
                     component: lgh_render::Component::Indirect,
                     ..RenderSettings::default()
                 };
-                s.lgh.normal_bins = false;
+                s.lgh.normal_bins = bins;
                 s.lgh.start_level = start_level;
                 s.lgh.alpha = 1.5;
                 s.tiling.interleave = Some(4);
@@ -546,12 +547,14 @@ mod tests {
                         .expect("gpu")
                         .expect("vpls");
                     assert!(set.vpls.is_empty() && set.kept > 0);
+                    assert_eq!(set.kept_bins.is_some(), s.lgh.normal_bins);
                     if !records {
                         crate::vpls::resident::clear(ctx);
                     }
                     let inputs = MethodInputs {
                         vpls: &none,
                         vpl_count: set.kept,
+                        vpl_bins: set.kept_bins,
                         ..made.inputs(world, s)
                     };
                     (render(&inputs), set.kept, set.paths)

@@ -62,6 +62,7 @@ impl FrameInputs {
             camera: &self.camera,
             vpls: &self.vpls.vpls,
             vpl_count: self.vpls.vpls.len(),
+            vpl_bins: None,
             settings: s,
             progress: &Silent,
         }

@@ -17,6 +17,7 @@ pub mod tables;
 use glam::Vec4;
 use lgh_core::vpl::Vpls;
 use lgh_render::World;
+use lgh_render::methods::lgh::NORMAL_BINS;
 use lgh_render::passes::vpl_gen::{PathNumbers, VplSet, max_paths, path_seed};
 
 use rayon::prelude::*;
@@ -65,13 +66,14 @@ struct CompactParams {
 struct GridInParams {
     count: u32,
     scale: f32,
-    pad: [u32; 2],
+    bins: u32,
+    words: u32,
 }
 
-/// The WGSL sources of the light-path kernel, the compaction and the conversion to the
-/// hierarchy build's layout.
+/// The WGSL sources of the light-path kernel, the compaction, the conversion to the
+/// hierarchy build's layout and the split by normal bin.
 #[must_use]
-pub fn sources() -> [String; 3] {
+pub fn sources() -> [String; 4] {
     [
         crate::kernel(&[
             include_str!("../shaders/vpl_paths.wgsl"),
@@ -81,7 +83,14 @@ pub fn sources() -> [String; 3] {
             include_str!("../shaders/bvh.wgsl"),
         ]),
         crate::kernel(&[include_str!("../shaders/vpl_compact.wgsl")]),
-        crate::kernel(&[include_str!("../shaders/vpl_grid.wgsl")]),
+        crate::kernel(&[
+            include_str!("../shaders/vpl_grid.wgsl"),
+            include_str!("../shaders/normal_bin.wgsl"),
+        ]),
+        crate::kernel(&[
+            include_str!("../shaders/vpl_bins.wgsl"),
+            include_str!("../shaders/normal_bin.wgsl"),
+        ]),
     ]
 }
 
@@ -111,6 +120,9 @@ pub(crate) enum Want {
     /// ([`resident::keep_held`]); the set comes back empty, its [`VplSet::kept`] their
     /// number.
     Grid,
+    /// As [`Want::Grid`], sorted by normal bin, each bin's number in
+    /// [`VplSet::kept_bins`].
+    GridBins,
 }
 
 /// [`generate_vpls`] for `(target, bounces, seed)`, with the VPLs where `want` says: with
@@ -143,7 +155,7 @@ fn generate<'c>(
     }
     let out = ctx.output("vpls", out_bytes)?;
     let status = ctx.output("vpl status", 16)?;
-    let [paths_src, compact_src, grid_src] = sources();
+    let [paths_src, compact_src, ..] = sources();
     let paths_kernel = ctx.pipeline("vpl paths", || paths_src);
     let compact_kernel = ctx.pipeline("vpl compact", || compact_src);
     let set_seed = path_seed(seed);
@@ -231,43 +243,18 @@ fn generate<'c>(
     }
     let scale = 1.0 / paths.max(1) as f32;
     let mut batch = Batch::new(ctx);
+    let bins = want == Want::GridBins;
     let grid_in = if want != Want::Cpu && done > 0 {
-        let lights = ctx.lease(
-            crate::grid::LIGHTS_IN,
-            done * crate::grid::LIGHT_BYTES,
-            GpuContext::STORAGE,
-        )?;
-        let params = ctx.uniform(
-            "vpl grid params",
-            &GridInParams {
-                count: done as u32,
-                scale,
-                pad: [0; 2],
-            },
-        );
-        // lo, hi (as order-preserving bits) and the first invalid index (shaders/vpl_grid.wgsl).
-        let max = u32::MAX;
-        let bounds = ctx.upload("vpl bounds", &[max, max, max, 0, 0, 0, max, 0])?;
-        let kernel = ctx.pipeline("vpl grid", || grid_src);
-        let bind = ctx.bind_group(
-            &kernel,
-            vec![
-                params.as_entire_binding(),
-                out.binding(),
-                lights.binding(),
-                bounds.binding(),
-            ],
-        );
-        batch.dispatch("vpl grid", &kernel, &bind, done as usize)?;
-        if want == Want::Grid {
-            batch.read(bounds.buffer(), 32)?;
+        let (lights, bounds) = to_grid_layout(ctx, &mut batch, (&out, done, scale), bins)?;
+        if want != Want::CpuAndGrid {
+            batch.read(bounds.buffer(), bounds.bytes())?;
         }
         batch.keep(bounds);
         Some(lights)
     } else {
         None
     };
-    if want == Want::Grid {
+    if matches!(want, Want::Grid | Want::GridBins) {
         let (reads, _) = batch.finish()?;
         let words: &[u32] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
         let Some(lights) = grid_in else {
@@ -278,12 +265,15 @@ fn generate<'c>(
             };
             return Ok((set, None));
         };
-        let held = resident::Held::new(done as usize, held_bounds(words), scale);
+        let parts = held_parts(words, if bins { NORMAL_BINS } else { 1 });
+        let kept_bins = bins.then(|| std::array::from_fn(|b| parts[b].count));
+        let held = resident::Held::new(done as usize, parts, scale);
         resident::keep_held(ctx, lights, out, held);
         let set = VplSet {
             vpls: Vpls::default(),
             paths,
             kept: done as usize,
+            kept_bins,
         };
         return Ok((set, None));
     }
@@ -298,13 +288,17 @@ fn generate<'c>(
         VplSet {
             vpls,
             paths,
-            kept: 0,
+            ..VplSet::default()
         },
         grid_in,
     ))
 }
 
-/// The bounds (lo, hi) of `shaders/vpl_grid.wgsl`'s first seven words (as
+/// Words per bin of `shaders/vpl_grid.wgsl`'s bounds: lo, hi (as order-preserving bits),
+/// the first invalid index, the count.
+const BIN_WORDS: usize = 8;
+
+/// The bounds (lo, hi) of one bin's words of `shaders/vpl_grid.wgsl`'s bounds (as
 /// order-preserving bits, then the first invalid index), or the index of the first invalid
 /// VPL.
 fn held_bounds(words: &[u32]) -> resident::Bounds {
@@ -323,6 +317,104 @@ fn held_bounds(words: &[u32]) -> resident::Bounds {
         [_, _, _, _, _, _, bad, ..] => Err(bad as usize),
         _ => Err(0),
     }
+}
+
+/// The `bins` parts of `shaders/vpl_grid.wgsl`'s bounds: each bin's first VPL, number and
+/// bounds (a missing word reads as an empty bin).
+fn held_parts(words: &[u32], bins: usize) -> Vec<resident::Part> {
+    let mut first = 0;
+    (0..bins)
+        .map(|b| {
+            let w = words.get(BIN_WORDS * b..BIN_WORDS * (b + 1)).unwrap_or(&[]);
+            let count = w.get(7).map_or(0, |&c| c as usize);
+            let part = resident::Part {
+                first,
+                count,
+                bounds: held_bounds(w),
+            };
+            first += count;
+            part
+        })
+        .collect()
+}
+
+/// Records into `batch` the conversion of `count` light-path records in `records` (flux
+/// scaled by `scale`) into the hierarchy build's layout (`shaders/vpl_grid.wgsl`), sorted
+/// by normal bin with `bins` (`shaders/vpl_bins.wgsl`, then [`crate::scan`]); returns the
+/// lights and their bounds' words ([`BIN_WORDS`] per bin, six bins).
+///
+/// # Errors
+/// A buffer could not be leased, or the VPLs exceed a dispatch or the scan.
+fn to_grid_layout<'c>(
+    ctx: &'c GpuContext,
+    batch: &mut Batch<'c>,
+    (records, count, scale): (&Lease<'c>, u64, f32),
+    bins: bool,
+) -> Result<(Lease<'c>, Lease<'c>), GpuError> {
+    let [_, _, grid_src, bins_src] = sources();
+    let lights = ctx.lease(
+        crate::grid::LIGHTS_IN,
+        count * crate::grid::LIGHT_BYTES,
+        GpuContext::STORAGE,
+    )?;
+    // Per bin: lo, hi (as order-preserving bits), the first invalid index, the count.
+    let max = u32::MAX;
+    let empty: Vec<u32> = [max, max, max, 0, 0, 0, max, 0].repeat(NORMAL_BINS);
+    let bounds = ctx.upload("vpl bounds", &empty)?;
+    let words = count.div_ceil(32);
+    let (bits, prefix) = if bins {
+        let n = NORMAL_BINS as u64 * words;
+        let (bits, prefix) = (
+            ctx.output("vpl bins", 4 * n)?,
+            ctx.output("vpl bin places", 4 * n)?,
+        );
+        let total = ctx.output("vpl bin total", 16)?;
+        batch.clear_lease(&bits);
+        let params = ctx.uniform("vpl bins params", &[count as u32, words as u32, 0, 0]);
+        let kernel = ctx.pipeline("vpl bins", || bins_src);
+        let bind = ctx.bind_group(
+            &kernel,
+            vec![
+                params.as_entire_binding(),
+                records.binding(),
+                bits.binding(),
+            ],
+        );
+        batch.dispatch("vpl bins", &kernel, &bind, count as usize)?;
+        crate::scan::record(ctx, batch, &bits, &prefix, &total, n as usize, true)?;
+        batch.keep(total);
+        (bits, prefix)
+    } else {
+        (
+            ctx.output("vpl bins", 16)?,
+            ctx.output("vpl bin places", 16)?,
+        )
+    };
+    let params = ctx.uniform(
+        "vpl grid params",
+        &GridInParams {
+            count: count as u32,
+            scale,
+            bins: u32::from(bins),
+            words: words as u32,
+        },
+    );
+    let kernel = ctx.pipeline("vpl grid", || grid_src);
+    let bind = ctx.bind_group(
+        &kernel,
+        vec![
+            params.as_entire_binding(),
+            records.binding(),
+            lights.binding(),
+            bounds.binding(),
+            bits.binding(),
+            prefix.binding(),
+        ],
+    );
+    batch.dispatch("vpl grid", &kernel, &bind, count as usize)?;
+    batch.keep(bits);
+    batch.keep(prefix);
+    Ok((lights, bounds))
 }
 
 /// `count` VPLs as the light-path kernel writes them (three `vec4`s each), the flux scaled
@@ -391,6 +483,7 @@ pub fn method_vpls(
         return Ok(None);
     }
     let want = match (for_grid, only_grid) {
+        (true, true) if s.lgh.normal_bins => Want::GridBins,
         (true, true) => Want::Grid,
         (true, false) => Want::CpuAndGrid,
         _ => Want::Cpu,

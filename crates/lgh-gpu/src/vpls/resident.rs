@@ -73,13 +73,25 @@ pub(crate) type Bounds = Result<(Vec3, Vec3), usize>;
 pub(crate) struct Held {
     /// Their number.
     pub(crate) count: usize,
-    /// Their bounds (lo, hi), or the index of the first invalid one (as
-    /// [`lighting_grid::bounds`](lgh_core::lighting_grid::bounds) finds them).
-    pub(crate) bounds: Bounds,
+    /// The parts the kept lights are in, one after the other: all of them, or one per
+    /// normal bin.
+    parts: Vec<Part>,
     /// The factor of their fluxes (one over the number of light paths).
     pub(crate) scale: f32,
     /// The VPLs as the light-path kernel wrote them (48 bytes each, flux not yet scaled).
     records: Option<Detached>,
+}
+
+/// A part of kept VPLs.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Part {
+    /// Its first VPL among the kept lights.
+    pub(crate) first: usize,
+    /// How many.
+    pub(crate) count: usize,
+    /// Their bounds (lo, hi), or the index of the first invalid one within the part (as
+    /// [`lighting_grid::bounds`](lgh_core::lighting_grid::bounds) finds them).
+    pub(crate) bounds: Bounds,
 }
 
 /// The kept VPLs of each thread that renders a frame (a frame makes its VPLs and builds
@@ -131,11 +143,12 @@ pub(crate) fn keep_held(ctx: &GpuContext, lights: Lease<'_>, records: Lease<'_>,
 }
 
 impl Held {
-    /// What is known of `count` VPLs not read back, their flux scaled by `scale`.
-    pub(crate) fn new(count: usize, bounds: Bounds, scale: f32) -> Self {
+    /// What is known of `count` VPLs not read back, kept in `parts`, their flux scaled
+    /// by `scale`.
+    pub(crate) fn new(count: usize, parts: Vec<Part>, scale: f32) -> Self {
         Self {
             count,
-            bounds,
+            parts,
             scale,
             records: None,
         }
@@ -156,23 +169,59 @@ pub(crate) fn take<'c>(ctx: &'c GpuContext, lights: &InputLights) -> Option<Leas
         .map(|l| ctx.attach(l))
 }
 
-/// This thread's kept lights of `count` VPLs that were not read back, with their bounds
-/// (or the first invalid one, [`Held::bounds`]); whatever else is kept is dropped (their
-/// records stay, for [`take_records`]).
-pub(crate) fn take_held(ctx: &GpuContext, count: usize) -> Option<(Lease<'_>, Bounds)> {
-    let (lights, bounds) = ctx.resident_vpls().with(|slot| {
-        let found = slot.as_ref().is_some_and(|k| {
-            k.lights.is_some() && k.held.as_ref().is_some_and(|h| h.count == count)
+/// This thread's kept lights of part `part` of VPLs that were not read back, if it has
+/// `count` of them, with their bounds (or the first invalid one, [`Part::bounds`]); where
+/// it has not, whatever else is kept is dropped (their records stay, for
+/// [`take_records`]). A part of several is copied into a lease of its own (on the GPU, in
+/// a submission of its own); the kept lights go back to the pool with the last part that
+/// has any.
+pub(crate) fn take_held(
+    ctx: &GpuContext,
+    part: usize,
+    count: usize,
+) -> Option<(Lease<'_>, Bounds)> {
+    let (source, last, p, whole) = ctx.resident_vpls().with(|slot| {
+        let p = slot.as_ref().and_then(|k| {
+            let p = *k.held.as_ref()?.parts.get(part)?;
+            (k.lights.is_some() && p.count == count).then_some(p)
         });
-        if !found {
+        let Some(p) = p else {
             *slot = None;
             return None;
-        }
+        };
         let kept = slot.as_mut()?;
-        let bounds = kept.held.as_ref()?.bounds;
-        Some((kept.lights.take()?, bounds))
+        let parts = &kept.held.as_ref()?.parts;
+        let whole = parts.len() == 1;
+        let source = kept.lights.as_ref()?.buffer().clone();
+        let last = (whole || parts[part + 1..].iter().all(|q| q.count == 0))
+            .then(|| kept.lights.take())
+            .flatten();
+        Some((source, last, p, whole))
     })?;
-    Some((ctx.attach(lights), bounds))
+    if whole {
+        return Some((ctx.attach(last?), p.bounds));
+    }
+    let bytes = crate::grid::LIGHT_BYTES;
+    let own = ctx
+        .lease(
+            crate::grid::LIGHTS_IN,
+            p.count as u64 * bytes,
+            GpuContext::STORAGE,
+        )
+        .ok()?;
+    let mut batch = crate::batch::Batch::new(ctx);
+    batch.copy_buffer(
+        &source,
+        p.first as u64 * bytes,
+        &own,
+        0,
+        p.count as u64 * bytes,
+    );
+    if let Some(d) = last {
+        batch.keep(ctx.attach(d));
+    }
+    batch.submit();
+    Some((own, p.bounds))
 }
 
 /// This thread's light-path records of `count` VPLs that were not read back, and their flux

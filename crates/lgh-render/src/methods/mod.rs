@@ -73,6 +73,9 @@ pub struct MethodInputs<'a> {
     /// How many VPLs the frame has: `vpls.len()`, or where the method's backend keeps
     /// them ([`crate::passes::vpl_gen::VplSet::kept`]) their number.
     pub vpl_count: usize,
+    /// Where the backend keeps the VPLs split by normal bin
+    /// ([`crate::passes::vpl_gen::VplSet::kept_bins`]), the number in each bin.
+    pub vpl_bins: Option<[usize; lgh::NORMAL_BINS]>,
     /// All settings of the frame; a method reads the part that is its own.
     pub settings: &'a RenderSettings,
     /// Progress of long passes.

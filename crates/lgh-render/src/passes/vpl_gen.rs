@@ -57,6 +57,10 @@ pub struct VplSet {
     /// needs none on the CPU ([`crate::methods::IndirectMethod::generate_vpls`]). Zero
     /// otherwise.
     pub kept: usize,
+    /// Where the backend also split the kept VPLs by the dominant direction of their normal
+    /// (`normal_bin` of `crate::methods::lgh`, for a frame with `--normal-bins`), the number
+    /// in each bin; `None` otherwise.
+    pub kept_bins: Option<[usize; crate::methods::lgh::NORMAL_BINS]>,
 }
 
 impl VplSet {
@@ -112,7 +116,7 @@ pub fn generate_vpls(
         return VplSet {
             vpls,
             paths,
-            kept: 0,
+            ..VplSet::default()
         };
     }
     let sobol_seed = path_seed(seed);
@@ -171,7 +175,7 @@ pub fn generate_vpls(
     VplSet {
         vpls,
         paths,
-        kept: 0,
+        ..VplSet::default()
     }
 }
 

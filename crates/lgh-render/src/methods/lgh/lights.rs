@@ -546,23 +546,3 @@ fn pick_weighted(weights: &[f32; SLOTS], total: f32, u: f32) -> usize {
     }
     SLOTS - 1
 }
-
-/// Splits VPLs into six groups by the dominant axis and sign of their normal (+x, -x, +y,
-/// -y, +z, -z), so that each hierarchy only averages normals that roughly agree.
-pub(super) fn split_by_normal(vpls: &Vpls) -> Vec<Vpls> {
-    let mut groups = vec![Vpls::default(); 6];
-    for i in 0..vpls.len() {
-        let n = vpls.normals[i];
-        let a = n.abs();
-        let axis = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let bin = 2 * axis + usize::from(n[axis] < 0.0);
-        groups[bin].push(vpls.positions[i], n, vpls.flux[i]);
-    }
-    groups
-}

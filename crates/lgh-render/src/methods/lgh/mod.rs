@@ -56,12 +56,14 @@ use lgh_core::lighting_grid::GridError;
 
 pub mod light_batch;
 mod lights;
+mod normal_bins;
 mod prepared;
 mod rep_set;
 pub mod settings;
 mod shade;
 pub mod tables;
 
+pub use normal_bins::{NORMAL_BINS, normal_bin};
 pub use prepared::{LghFrame, LightSpheres, LoopResult, Prepared};
 pub use settings::{
     DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, INTERACTIVE_INTERLEAVE, JitterAt,

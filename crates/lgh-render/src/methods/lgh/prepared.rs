@@ -17,7 +17,8 @@ use lgh_core::vpl::Vpls;
 use rayon::prelude::*;
 
 use super::LghStats;
-use super::lights::{LghTargets, ShadeLights, split_by_normal};
+use super::lights::{LghTargets, ShadeLights};
+use super::normal_bins::{NORMAL_BINS, split_by_normal};
 use super::settings::{DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt};
 use super::settings::{ShadowTarget, auto_tile};
 use super::shade::{RowContext, RowScratch, shade_rows};
@@ -155,7 +156,8 @@ impl LghFrame {
     /// `tables`, without the unbiased estimate's shadow samples, with one level shown
     /// alone, or with some grids on the CPU and some not), or the VPLs are kept on the
     /// builder's device ([`MethodInputs::vpls`] empty, [`MethodInputs::vpl_count`] not) where
-    /// the frame needs them here (normal bins, or a grid read back):
+    /// the frame needs them here (normal bins the device did not split them into,
+    /// [`MethodInputs::vpl_bins`], or a grid read back):
     /// [`GridError::KeptOnDevice`].
     pub fn prepare_with(
         inputs: &MethodInputs,
@@ -199,17 +201,22 @@ impl LghFrame {
             }));
         }
         // One hierarchy, or one per dominant normal direction (--normal-bins); where the
-        // builder's device keeps the VPLs (none here), one of them all, built there.
+        // builder's device keeps the VPLs (none here), built there, of the parts it keeps
+        // them in: all of them, or the bins it split them into. Each group: its VPLs here
+        // (none where held), their number, its part on the device.
         let held = vpls.is_empty();
-        if held && settings.normal_bins {
-            return Err(GridError::KeptOnDevice);
-        }
         let split;
-        let groups: Vec<&Vpls> = if settings.normal_bins {
-            split = split_by_normal(vpls);
-            split.iter().collect()
-        } else {
-            vec![vpls]
+        let groups: Vec<(&Vpls, usize, usize)> = match (held, settings.normal_bins) {
+            (false, true) => {
+                split = split_by_normal(vpls);
+                split.iter().map(|g| (g, g.len(), 0)).collect()
+            }
+            (false, false) => vec![(vpls, vpls.len(), 0)],
+            (true, false) => vec![(vpls, inputs.vpl_count, 0)],
+            (true, true) => {
+                let bins = inputs.vpl_bins.ok_or(GridError::KeptOnDevice)?;
+                (0..NORMAL_BINS).map(|b| (vpls, bins[b], b)).collect()
+            }
         };
         let lowest = settings.start_level.min(1);
         let unbiased = settings.estimator == Estimator::Unbiased;
@@ -219,11 +226,10 @@ impl LghFrame {
         // A builder that can draw the S_1 representatives with the build (a GPU's) does.
         let draw = k > 0 && unbiased && settings.shadow_target == ShadowTarget::Representative;
         builder.draw_representatives(draw.then_some(seed));
-        for group in groups.iter().filter(|g| held || !g.is_empty()) {
-            let count = if held { inputs.vpl_count } else { group.len() };
+        for &(group, count, part) in groups.iter().filter(|g| g.1 > 0) {
             let start = Instant::now();
             if held {
-                builder.build_held(count, settings.levels, settings.construction)?;
+                builder.build_held(part, count, settings.levels, settings.construction)?;
             } else {
                 builder.build(&group.as_input(), settings.levels, settings.construction)?;
             }
