@@ -20,9 +20,10 @@
 
 use std::time::Instant;
 
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 use lgh_render::methods::lgh::LightSpheres;
 use lgh_render::passes::gbuffer::GBuffer;
+use lgh_render::shading::tiles::emission_facing;
 use lgh_scene::camera::CameraFrame;
 
 use crate::batch::{Batch, PassTimes};
@@ -121,14 +122,22 @@ pub fn sources() -> [String; 5] {
     ]
 }
 
-/// The spheres of `s` as the kernels read them: centre and radius (finite), and per light
-/// its sub-image with the flags for radii that are not.
+/// The spheres of `s` as the kernels read them: two `vec4`s a light, centre and radius
+/// (finite), then the emission normal the binning culls by (`emission_facing`, zero for
+/// none); and per light its sub-image with the flags for radii that are not.
 pub(crate) fn pack_spheres(s: &LightSpheres) -> (Vec<Vec4>, Vec<u32>) {
     let spheres = s
         .centres
         .iter()
         .zip(s.radii)
-        .map(|(c, &r)| c.extend(if r.is_finite() { r } else { 0.0 }))
+        .enumerate()
+        .flat_map(|(i, (c, &r))| {
+            let m = match (s.normals.get(i), s.iso.get(i)) {
+                (Some(&m), Some(&iso)) => emission_facing(m, iso),
+                _ => Vec3::ZERO,
+            };
+            [c.extend(if r.is_finite() { r } else { 0.0 }), m.extend(0.0)]
+        })
         .collect();
     let flags = s
         .radii

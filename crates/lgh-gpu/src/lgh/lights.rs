@@ -71,7 +71,8 @@ pub fn sources() -> [String; 2] {
 pub(super) struct GpuLights<'c> {
     /// The loop's light table (four vec4 a light).
     pub table: Lease<'c>,
-    /// The binning's spheres (centre, finite radius) and sub-images with flags.
+    /// The binning's spheres (centre, finite radius; the emission normal it culls by) and
+    /// sub-images with flags.
     pub spheres: Lease<'c>,
     pub flags: Lease<'c>,
 }
@@ -102,7 +103,7 @@ pub(super) fn record<'c>(
     let n2 = t.n.max(1) * t.n.max(1);
     let out = GpuLights {
         table: ctx.output("lights", 64 * lights as u64)?,
-        spheres: ctx.output("bin spheres", 16 * lights as u64)?,
+        spheres: ctx.output("bin spheres", 32 * lights as u64)?,
         flags: ctx.output("bin flags", 4 * lights as u64)?,
     };
     let [rows_src, vpl_src] = sources();
@@ -237,7 +238,7 @@ mod tests {
         (
             (
                 table[..n].to_vec(),
-                spheres[..n].to_vec(),
+                spheres[..2 * n].to_vec(),
                 flags[..n].to_vec(),
             ),
             (cpu_table, cpu_spheres, cpu_flags),

@@ -10,7 +10,7 @@
 //! test.) Lists keep the lights' order, so shading that walks them is deterministic. One
 //! binning module serves every tiled method.
 
-use glam::{Vec3, Vec4};
+use glam::{BVec4A, Vec3, Vec4};
 use lgh_scene::camera::CameraFrame;
 use rayon::prelude::*;
 
@@ -82,19 +82,18 @@ impl TileBins {
             frame,
             &bounds,
             (lattice.sy * n + lattice.sx) as usize,
-            centres,
-            radii,
+            (centres, radii, &[]),
         )
     }
 
-    /// The bins of sub-image `s` from the tile bounds of every sub-image.
+    /// The bins of sub-image `s` from the tile bounds of every sub-image, of lights
+    /// (centres, radii, facing: as [`InterleavedBins::from_bounds`]).
     fn from_bounds(
         g: &GBuffer,
         frame: &CameraFrame,
         all: &AllBounds,
         s: usize,
-        centres: &[Vec3],
-        radii: &[f32],
+        (centres, radii, facing): (&[Vec3], &[f32], &[Vec3]),
     ) -> Self {
         let (tile, tiles_x, tiles_y) = (all.tile, all.tiles_x, all.tiles_y);
         let n_tiles = (tiles_x * tiles_y) as usize;
@@ -118,9 +117,13 @@ impl TileBins {
                         continue;
                     };
                     let (lo, hi) = depth(i);
+                    let m = facing.get(i).copied().unwrap_or(Vec3::ZERO);
                     for ty in y0 / tile..=y1 / tile {
                         for tx in x0 / tile..=x1 / tile {
-                            if all.get(s, tx, ty).may_reach(lo, hi, centres[i], radii[i]) {
+                            if all
+                                .get(s, tx, ty)
+                                .may_reach(lo, hi, centres[i], radii[i], m)
+                            {
                                 pairs.push((ty * tiles_x + tx, i as u32));
                             }
                         }
@@ -319,15 +322,18 @@ impl TileBounds {
     /// range [`lo`, `hi`] in front of its tangent plane: the ranges do not meet, or in every
     /// slice the sphere misses the box, or `c` lies behind every point's tangent plane
     /// (n_x . (c - x) <= 0 for every point x of the slice, whose light is then zero: bounded
-    /// by n_s . c - min n_s . x + max |n_x - n_s| |c - x|).
+    /// by n_s . c - min n_s . x + max |n_x - n_s| |c - x|), or, for a light with emission
+    /// normal `m` not zero, every point lies behind the light's plane (m . (x - c) <= 0).
     #[inline]
-    fn may_reach(&self, lo: f32, hi: f32, c: Vec3, r: f32) -> bool {
+    fn may_reach(&self, lo: f32, hi: f32, c: Vec3, r: f32, m: Vec3) -> bool {
         if self.zmin > hi || self.zmax < lo {
             return false;
         }
         // Squared distances from c to each box, nearest and farthest, and n_s . c, four
         // boxes at once.
         let (mut d2, mut far2, mut nc) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
+        // The greatest m . (x - c) over each box.
+        let mut front = Vec4::ZERO;
         for (a, ca) in c.to_array().into_iter().enumerate() {
             let ca = Vec4::splat(ca);
             let (lo, hi) = (Vec4::from_array(self.lo[a]), Vec4::from_array(self.hi[a]));
@@ -336,6 +342,8 @@ impl TileBounds {
             let f = (ca - lo).abs().max((hi - ca).abs());
             far2 += f * f;
             nc += Vec4::from_array(self.normal[a]) * ca;
+            let ma = Vec4::splat(m[a]);
+            front += ((lo - ca) * ma).max((hi - ca) * ma);
         }
         // The bound less a rounding allowance, so that a light the shading would give a
         // grazing, non-zero cosine is kept whatever the tile size.
@@ -344,8 +352,21 @@ impl TileBounds {
         let behind =
             (nc - Vec4::from_array(self.plane) + Vec4::from_array(self.spread) * far + allowance)
                 .cmple(Vec4::ZERO);
-        (d2.cmple(Vec4::splat(r * r)) & !behind).any()
+        // Behind the light's own plane (m . (x - c) <= 0 over the whole box), where a light
+        // that emits only in front of it gives nothing.
+        let unlit = (front + allowance).cmple(Vec4::ZERO) & BVec4A::splat(m != Vec3::ZERO);
+        (d2.cmple(Vec4::splat(r * r)) & !behind & !unlit).any()
     }
+}
+
+/// What the binning culls a light by on its own side ([`InterleavedBins::build`]'s
+/// `facing`): its emission normal `m` where it emits nothing behind its plane (the
+/// emission cosine max(0, m . w) + `iso` with `iso` zero: a VPL, a grid light whose VPLs'
+/// normals agree), else zero (no such cull).
+#[inline]
+#[must_use]
+pub fn emission_facing(m: Vec3, iso: f32) -> Vec3 {
+    if iso == 0.0 { m } else { Vec3::ZERO }
 }
 
 /// The pixel rectangle [x0, y0, x1, y1] (inclusive) covered by the sphere (c, r), or `None`
@@ -392,21 +413,24 @@ pub struct InterleavedBins {
 }
 
 impl InterleavedBins {
-    /// Bins spheres (`centres[i]`, `radii[i]`, as [`TileBins::build`]) of sub-image `sub[i]`
-    /// (< n^2) into the tiles of their sub-image, in parallel over sub-images.
+    /// Bins the lights `(centres, radii, facing)` of sub-image `sub[i]` (< n^2) into the
+    /// tiles of their sub-image, in parallel over sub-images: spheres (`centres[i]`,
+    /// `radii[i]`, as [`TileBins::build`]), and where `facing[i]` is not zero (`facing`
+    /// may be empty: none is), a light that gives nothing behind the plane through its
+    /// centre with normal `facing[i]` ([`emission_facing`]) is not listed in the tiles that
+    /// lie wholly behind it.
     #[must_use]
     pub fn build(
         g: &GBuffer,
         frame: &CameraFrame,
         tile: u32,
         n: u32,
-        centres: &[Vec3],
-        radii: &[f32],
+        lights: (&[Vec3], &[f32], &[Vec3]),
         sub: &[u16],
     ) -> Self {
         let n = n.max(1);
         let all = AllBounds::new(g, n, tile.max(1) * n);
-        Self::from_bounds(g, frame, &all, centres, radii, sub)
+        Self::from_bounds(g, frame, &all, lights, sub)
     }
 
     /// [`InterleavedBins::build`] with the tile bounds `all` of `g` already found (their
@@ -416,8 +440,7 @@ impl InterleavedBins {
         g: &GBuffer,
         frame: &CameraFrame,
         all: &AllBounds,
-        centres: &[Vec3],
-        radii: &[f32],
+        (centres, radii, facing): (&[Vec3], &[f32], &[Vec3]),
         sub: &[u16],
     ) -> Self {
         let n = all.n;
@@ -431,7 +454,12 @@ impl InterleavedBins {
             .map(|(s, m)| {
                 let c: Vec<Vec3> = m.iter().map(|&i| centres[i as usize]).collect();
                 let r: Vec<f32> = m.iter().map(|&i| radii[i as usize]).collect();
-                TileBins::from_bounds(g, frame, all, s, &c, &r)
+                let f: Vec<Vec3> = if facing.is_empty() {
+                    Vec::new()
+                } else {
+                    m.iter().map(|&i| facing[i as usize]).collect()
+                };
+                TileBins::from_bounds(g, frame, all, s, (&c, &r, &f))
             })
             .collect();
         Self { n, members, bins }
@@ -548,7 +576,7 @@ mod tests {
         let radii = vec![f32::INFINITY; count];
         for n in [1u32, 2, 4] {
             let sub: Vec<u16> = (0..count).map(|i| (i % (n * n) as usize) as u16).collect();
-            let bins = InterleavedBins::build(&g, &frame, 4, n, &centres, &radii, &sub);
+            let bins = InterleavedBins::build(&g, &frame, 4, n, (&centres, &radii, &[]), &sub);
             let mut seen = vec![0u32; count];
             for y in 0..n {
                 for x in 0..n {

@@ -253,7 +253,11 @@ fn without_occluders_the_ratio_is_one_and_lgh_equals_lgh_unshadowed() {
 /// (pixel, light) pair closer than the light's reach, with the light in front of the pixel's
 /// tangent plane, is listed in the pixel's tile (checked
 /// against a loop over all lights, on the Cornell box with random spheres, some of infinite
-/// radius, some reaching behind the camera).
+/// radius, some reaching behind the camera); under interleaving also with the lights'
+/// emission normals (`facing`: a light that emits only in front of its plane, or zero for
+/// one that emits everywhere), where a pixel behind a light's plane need not list it, and
+/// then fewer pairs are listed (measured: 5720 of 6364 at n = 2, 3361 of 3553 at n = 3;
+/// every 50th light reaches everywhere).
 #[test]
 fn tile_binning_never_drops_a_covering_light() {
     use glam::Vec3;
@@ -280,10 +284,22 @@ fn tile_binning_never_drops_a_covering_light() {
             0.005 + 0.2 * rng.next_f32().powi(2)
         });
     }
+    // Half the lights emit only in front of their plane.
+    let facing: Vec<Vec3> = (0..centres.len())
+        .map(|i| {
+            let m = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5;
+            if i % 2 == 0 {
+                m.normalize()
+            } else {
+                Vec3::ZERO
+            }
+        })
+        .collect();
     // Every hit pixel's list holds every light of `ours` (its sub-image) that reaches it.
     let check = |label: &str,
                  listed: &dyn Fn(u32, u32) -> Vec<usize>,
-                 ours: &dyn Fn(usize, u32, u32) -> bool| {
+                 ours: &dyn Fn(usize, u32, u32) -> bool,
+                 faces: &[Vec3]| {
         for y in 0..h {
             for x in 0..w {
                 let i = (y * w + x) as usize;
@@ -293,7 +309,10 @@ fn tile_binning_never_drops_a_covering_light() {
                 let listed = listed(x, y);
                 for j in 0..centres.len() {
                     let to = centres[j] - g.position[i];
-                    if ours(j, x, y) && to.length() < radii[j] && g.normal[i].dot(to) > 0.0 {
+                    let lit = faces
+                        .get(j)
+                        .is_none_or(|m| *m == Vec3::ZERO || m.dot(to) < 0.0);
+                    if ours(j, x, y) && to.length() < radii[j] && g.normal[i].dot(to) > 0.0 && lit {
                         assert!(
                             listed.contains(&j),
                             "{label}: light {j} dropped at ({x}, {y})"
@@ -309,6 +328,7 @@ fn tile_binning_never_drops_a_covering_light() {
             &format!("tile {tile}"),
             &|x, y| bins.lights_at(x, y).iter().map(|&j| j as usize).collect(),
             &|_, _, _| true,
+            &[],
         );
     }
     // The same under n x n interleaving, where each sub-image bins its own lights.
@@ -316,11 +336,26 @@ fn tile_binning_never_drops_a_covering_light() {
         let sub: Vec<u16> = (0..centres.len())
             .map(|j| (j as u32 % (n * n)) as u16)
             .collect();
-        let bins = InterleavedBins::build(&g, &frame, 4, n, &centres, &radii, &sub);
-        check(
-            &format!("n {n}"),
-            &|x, y| bins.lights_at(x, y).collect(),
-            &|j, x, y| usize::from(sub[j]) == sub_image_of(x, y, n),
+        let mut pairs = [0, 0];
+        for (k, faces) in [&[][..], &facing[..]].into_iter().enumerate() {
+            let lights = (&centres[..], &radii[..], faces);
+            let bins = InterleavedBins::build(&g, &frame, 4, n, lights, &sub);
+            check(
+                &format!("n {n}, facing {}", !faces.is_empty()),
+                &|x, y| bins.lights_at(x, y).collect(),
+                &|j, x, y| usize::from(sub[j]) == sub_image_of(x, y, n),
+                faces,
+            );
+            pairs[k] = (0..h)
+                .flat_map(|y| (0..w).map(move |x| (x, y)))
+                .map(|(x, y)| bins.lights_at(x, y).count())
+                .sum::<usize>();
+        }
+        assert!(
+            (pairs[1] as f64) < 0.97 * pairs[0] as f64,
+            "n {n}: facing lists {} of {} pairs",
+            pairs[1],
+            pairs[0]
         );
     }
 }

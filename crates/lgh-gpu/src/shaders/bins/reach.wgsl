@@ -4,7 +4,8 @@
 
 @group(0) @binding(0) var<uniform> P: BinParams;
 @group(0) @binding(1) var<uniform> C: Camera;
-// Per light: centre and radius (finite; see the flags).
+// Per light: centre and radius (finite; see the flags), then the emission normal it is
+// culled by (zero: none; lgh-render's emission_facing).
 @group(0) @binding(2) var<storage, read> spheres: array<vec4<f32>>;
 // Per light: its sub-image and flags.
 @group(0) @binding(3) var<storage, read> flags: array<u32>;
@@ -37,8 +38,8 @@ fn light_span(i: u32) -> Span {
         s.everywhere = true;
         return s;
     }
-    let c = spheres[i].xyz;
-    let r = spheres[i].w;
+    let c = spheres[2u * i].xyz;
+    let r = spheres[2u * i].w;
     let d = c - C.origin;
     let cz = dot(d, C.forward);
     if (cz + r < 0.0) {
@@ -75,10 +76,12 @@ fn light_span(i: u32) -> Span {
 }
 
 // False only if no surface point of the tile of bounds `b` can lie in light i's sphere in
-// front of its tangent plane (lgh-render's TileBounds::may_reach).
+// front of its tangent plane and, for a light with emission normal m, in front of the
+// light's own plane (lgh-render's TileBounds::may_reach).
 // A light of infinite reach is kept by an empty tile and by a tile with an empty slice, as
 // the CPU's infinities keep it, and otherwise only by the tangent-plane test.
-fn may_reach(b: TileBounds, s: Span, c: vec3<f32>, r: f32) -> bool {
+fn may_reach(b: TileBounds, s: Span, c: vec3<f32>, r: f32, m: vec3<f32>) -> bool {
+    let facing = any(m != vec3<f32>(0.0));
     if (b.z.z == 0.0) {
         return s.everywhere;
     }
@@ -101,7 +104,10 @@ fn may_reach(b: TileBounds, s: Span, c: vec3<f32>, r: f32) -> bool {
         let nc = ns.x * c.x + ns.y * c.y + ns.z * c.z;
         let allowance = (length(c) + far) * ROUNDING;
         let behind = nc - b.normal[k].w + b.hi[k].w * far + allowance <= 0.0;
-        if ((s.everywhere || dot(d, d) <= r * r) && !behind) {
+        // The greatest m . (x - c) over the box.
+        let front = max((lo - c) * m, (hi - c) * m);
+        let unlit = facing && front.x + front.y + front.z + allowance <= 0.0;
+        if ((s.everywhere || dot(d, d) <= r * r) && !behind && !unlit) {
             return true;
         }
     }
@@ -118,12 +124,13 @@ fn list_of(i: u32, tx: u32, ty: u32) -> u32 {
 fn visit_listings(first: u32, stride: u32) {
     for (var i = first; i < P.lights; i += stride) {
         let s = light_span(i);
-        let c = spheres[i].xyz;
-        let r = spheres[i].w;
+        let c = spheres[2u * i].xyz;
+        let r = spheres[2u * i].w;
+        let m = spheres[2u * i + 1u].xyz;
         for (var ty = s.lo.y; ty <= s.hi.y; ty++) {
             for (var tx = s.lo.x; tx <= s.hi.x; tx++) {
                 let l = list_of(i, tx, ty);
-                if (may_reach(bounds[l], s, c, r)) {
+                if (may_reach(bounds[l], s, c, r, m)) {
                     listed(i, l);
                 }
             }

@@ -33,7 +33,7 @@ use crate::shading::ratio::{
 };
 use crate::shading::reservoirs::ReservoirLayout;
 use crate::shading::shadow_pass::{ShadowEstimates, ShadowPass, Targets};
-use crate::shading::tiles::{AllBounds, InterleavedBins};
+use crate::shading::tiles::{AllBounds, InterleavedBins, emission_facing};
 
 /// Random-stream tag of the grid offset of `--grid-jitter`.
 const STREAM_GRID_SHIFT: u64 = 0x6a1d;
@@ -81,6 +81,12 @@ pub struct LightSpheres<'a> {
     pub radii: &'a [f32],
     /// Sub-image of each light.
     pub sub: &'a [u16],
+    /// Emission normal m and isotropic share of each light: the binning also drops a
+    /// light from the tiles behind its plane where it emits nothing there
+    /// ([`crate::shading::tiles::emission_facing`]).
+    pub normals: &'a [Vec3],
+    /// See `normals`.
+    pub iso: &'a [f32],
     /// Interleaving n.
     pub n: u32,
     /// Tile edge in sub-image pixels.
@@ -101,12 +107,17 @@ fn bin(
     let bounds = memory
         .tile_bounds
         .get_or_insert_with(g, [n, tile, 0, 0], || AllBounds::new(g, n, tile * n));
+    let facing: Vec<Vec3> = lights
+        .normal
+        .par_iter()
+        .zip(&lights.iso)
+        .map(|(&m, &iso)| emission_facing(m, iso))
+        .collect();
     InterleavedBins::from_bounds(
         g,
         inputs.camera,
         bounds,
-        &lights.position,
-        &lights.reach,
+        (&lights.position, &lights.reach, &facing),
         &lights.sub,
     )
 }
@@ -345,8 +356,9 @@ impl LghFrame {
 
     /// What the tile binning reads, for a backend that bins the lights itself: light i is a
     /// sphere (`centres[i]`, `radii[i]`; infinite radius: everywhere, negative or NaN:
-    /// nowhere) of sub-image `sub[i]`, binned into tiles of `tile` sub-image pixels under
-    /// `n` x `n` interleaving ([`InterleavedBins::build`]).
+    /// nowhere) of sub-image `sub[i]`, with emission normal `normals[i]` and isotropic share
+    /// `iso[i]`, binned into tiles of `tile` sub-image pixels under `n` x `n` interleaving
+    /// ([`InterleavedBins::build`]).
     #[must_use]
     pub fn spheres(&self) -> LightSpheres<'_> {
         LightSpheres {
@@ -354,6 +366,8 @@ impl LghFrame {
             centres: &self.lights.position,
             radii: &self.lights.reach,
             sub: &self.lights.sub,
+            normals: &self.lights.normal,
+            iso: &self.lights.iso,
             n: self.n,
             tile: self.tile,
         }

@@ -238,13 +238,14 @@ pub fn render_slc(
     // Step 2: per sub-image, its lights (i = s mod n^2) binned into its tiles.
     let bins = t.time("culling", || {
         let sub: Vec<u16> = (0..vpls.len()).map(|i| (i % n2) as u16).collect();
+        // A VPL emits nothing behind its plane.
+        let facing = &vpls.normals;
         InterleavedBins::build(
             g,
             inputs.camera,
             all.tiling.tile.unwrap_or(DEFAULT_TILE),
             n,
-            &vpls.positions,
-            &ranges.range,
+            (&vpls.positions, &ranges.range, facing),
             &sub,
         )
     });
