@@ -66,6 +66,16 @@ impl LevelRole {
             Self::Top => (0.0, 1.0),
         }
     }
+
+    /// The distance below which B_l is zero for a level of radius `r` = r_l: r / 2 where
+    /// the role has a rising edge (middle and top levels), else 0 (B_l = 1 near the light).
+    #[must_use]
+    pub fn hole(self, r: f32) -> f32 {
+        match self {
+            Self::Middle | Self::Top => 0.5 * r,
+            Self::Only | Self::Lowest => 0.0,
+        }
+    }
 }
 
 /// B_l(d) for a level of radius `r` = r_l and the given role.

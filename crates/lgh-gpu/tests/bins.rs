@@ -8,7 +8,7 @@ use lgh_render::methods::MethodInputs;
 use lgh_render::methods::lgh::{LghFrame, Prepared};
 use lgh_render::passes::gbuffer::GBuffer;
 use lgh_render::passes::vpl_gen::generate_vpls;
-use lgh_render::shading::tiles::{FlatBins, InterleavedBins, emission_facing};
+use lgh_render::shading::tiles::{BinLights, FlatBins, InterleavedBins};
 use lgh_render::{RenderSettings, Silent, World};
 
 mod common;
@@ -51,14 +51,14 @@ fn both(
         panic!("a frame with VPLs");
     };
     let sp = frame.spheres();
-    let facing: Vec<glam::Vec3> = sp
-        .normals
-        .iter()
-        .zip(sp.iso)
-        .map(|(&m, &iso)| emission_facing(m, iso))
-        .collect();
-    assert!(facing.iter().any(|m| *m != glam::Vec3::ZERO));
-    let lights = (sp.centres, sp.radii, &facing[..]);
+    assert!(sp.facing.iter().any(|m| *m != glam::Vec3::ZERO));
+    assert!(sp.holes.iter().any(|&h| h > 0.0));
+    let lights = BinLights {
+        centres: sp.centres,
+        radii: sp.radii,
+        facing: &sp.facing,
+        holes: &sp.holes,
+    };
     let cpu = InterleavedBins::build(&g, &camera, sp.tile, sp.n, lights, sp.sub).flatten(w, h);
     let ctx = lgh_gpu::GpuContext::shared().expect("an adapter");
     let gbuffer = ctx.gbuffer(&g).expect("G-buffer");

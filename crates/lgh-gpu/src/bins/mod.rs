@@ -23,7 +23,6 @@ use std::time::Instant;
 use glam::{Vec3, Vec4};
 use lgh_render::methods::lgh::LightSpheres;
 use lgh_render::passes::gbuffer::GBuffer;
-use lgh_render::shading::tiles::emission_facing;
 use lgh_scene::camera::CameraFrame;
 
 use crate::batch::{Batch, PassTimes};
@@ -123,8 +122,9 @@ pub fn sources() -> [String; 5] {
 }
 
 /// The spheres of `s` as the kernels read them: two `vec4`s a light, centre and radius
-/// (finite), then the emission normal the binning culls by (`emission_facing`, zero for
-/// none); and per light its sub-image with the flags for radii that are not.
+/// (finite), then the normal of the plane behind which it gives nothing (zero for none)
+/// and the distance within which it gives nothing (`BinLights::facing`, `holes`); and per
+/// light its sub-image with the flags for radii that are not.
 pub(crate) fn pack_spheres(s: &LightSpheres) -> (Vec<Vec4>, Vec<u32>) {
     let spheres = s
         .centres
@@ -132,11 +132,12 @@ pub(crate) fn pack_spheres(s: &LightSpheres) -> (Vec<Vec4>, Vec<u32>) {
         .zip(s.radii)
         .enumerate()
         .flat_map(|(i, (c, &r))| {
-            let m = match (s.normals.get(i), s.iso.get(i)) {
-                (Some(&m), Some(&iso)) => emission_facing(m, iso),
-                _ => Vec3::ZERO,
-            };
-            [c.extend(if r.is_finite() { r } else { 0.0 }), m.extend(0.0)]
+            let m = s.facing.get(i).copied().unwrap_or(Vec3::ZERO);
+            let hole = s.holes.get(i).copied().unwrap_or(0.0);
+            [
+                c.extend(if r.is_finite() { r } else { 0.0 }),
+                m.extend(hole),
+            ]
         })
         .collect();
     let flags = s

@@ -82,19 +82,24 @@ impl TileBins {
             frame,
             &bounds,
             (lattice.sy * n + lattice.sx) as usize,
-            (centres, radii, &[]),
+            BinLights::spheres(centres, radii),
         )
     }
 
-    /// The bins of sub-image `s` from the tile bounds of every sub-image, of lights
-    /// (centres, radii, facing: as [`InterleavedBins::from_bounds`]).
+    /// The bins of sub-image `s` from the tile bounds of every sub-image, of `lights`.
     fn from_bounds(
         g: &GBuffer,
         frame: &CameraFrame,
         all: &AllBounds,
         s: usize,
-        (centres, radii, facing): (&[Vec3], &[f32], &[Vec3]),
+        lights: BinLights<'_>,
     ) -> Self {
+        let BinLights {
+            centres,
+            radii,
+            facing,
+            holes,
+        } = lights;
         let (tile, tiles_x, tiles_y) = (all.tile, all.tiles_x, all.tiles_y);
         let n_tiles = (tiles_x * tiles_y) as usize;
         let depth = |i: usize| {
@@ -118,11 +123,12 @@ impl TileBins {
                     };
                     let (lo, hi) = depth(i);
                     let m = facing.get(i).copied().unwrap_or(Vec3::ZERO);
+                    let hole = holes.get(i).copied().unwrap_or(0.0);
                     for ty in y0 / tile..=y1 / tile {
                         for tx in x0 / tile..=x1 / tile {
                             if all
                                 .get(s, tx, ty)
-                                .may_reach(lo, hi, centres[i], radii[i], m)
+                                .may_reach(lo, hi, centres[i], radii[i], m, hole)
                             {
                                 pairs.push((ty * tiles_x + tx, i as u32));
                             }
@@ -323,9 +329,10 @@ impl TileBounds {
     /// slice the sphere misses the box, or `c` lies behind every point's tangent plane
     /// (n_x . (c - x) <= 0 for every point x of the slice, whose light is then zero: bounded
     /// by n_s . c - min n_s . x + max |n_x - n_s| |c - x|), or, for a light with emission
-    /// normal `m` not zero, every point lies behind the light's plane (m . (x - c) <= 0).
+    /// normal `m` not zero, every point lies behind the light's plane (m . (x - c) <= 0), or
+    /// every point lies within `hole` of `c` ([`BinLights::holes`]).
     #[inline]
-    fn may_reach(&self, lo: f32, hi: f32, c: Vec3, r: f32, m: Vec3) -> bool {
+    fn may_reach(&self, lo: f32, hi: f32, c: Vec3, r: f32, m: Vec3, hole: f32) -> bool {
         if self.zmin > hi || self.zmax < lo {
             return false;
         }
@@ -355,12 +362,43 @@ impl TileBounds {
         // Behind the light's own plane (m . (x - c) <= 0 over the whole box), where a light
         // that emits only in front of it gives nothing.
         let unlit = (front + allowance).cmple(Vec4::ZERO) & BVec4A::splat(m != Vec3::ZERO);
-        (d2.cmple(Vec4::splat(r * r)) & !behind & !unlit).any()
+        // Within the hole, where the light gives nothing.
+        let inside = (far + allowance).cmplt(Vec4::splat(hole));
+        (d2.cmple(Vec4::splat(r * r)) & !behind & !unlit & !inside).any()
     }
 }
 
-/// What the binning culls a light by on its own side ([`InterleavedBins::build`]'s
-/// `facing`): its emission normal `m` where it emits nothing behind its plane (the
+/// The lights a binning lists: spheres of influence, and where else each gives nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BinLights<'a> {
+    /// Centres.
+    pub centres: &'a [Vec3],
+    /// Radii of the spheres (infinite: everywhere; negative or NaN: nowhere).
+    pub radii: &'a [f32],
+    /// Per light a normal m, where the light gives nothing at the points x behind the plane
+    /// through its centre, m . (x - c) <= 0; zero where it lights both sides
+    /// ([`emission_facing`]). Empty: zero for every light.
+    pub facing: &'a [Vec3],
+    /// Per light the distance from its centre within which it gives nothing (lgh's grid
+    /// lights whose blending weight rises from r_l / 2, [`lgh_core::blending::LevelRole::hole`]);
+    /// empty: none.
+    pub holes: &'a [f32],
+}
+
+impl<'a> BinLights<'a> {
+    /// Spheres alone.
+    #[must_use]
+    pub fn spheres(centres: &'a [Vec3], radii: &'a [f32]) -> Self {
+        Self {
+            centres,
+            radii,
+            ..Self::default()
+        }
+    }
+}
+
+/// What the binning culls a light by on its own side ([`BinLights::facing`]): its
+/// emission normal `m` where it emits nothing behind its plane (the
 /// emission cosine max(0, m . w) + `iso` with `iso` zero: a VPL, a grid light whose VPLs'
 /// normals agree), else zero (no such cull).
 #[inline]
@@ -413,19 +451,15 @@ pub struct InterleavedBins {
 }
 
 impl InterleavedBins {
-    /// Bins the lights `(centres, radii, facing)` of sub-image `sub[i]` (< n^2) into the
-    /// tiles of their sub-image, in parallel over sub-images: spheres (`centres[i]`,
-    /// `radii[i]`, as [`TileBins::build`]), and where `facing[i]` is not zero (`facing`
-    /// may be empty: none is), a light that gives nothing behind the plane through its
-    /// centre with normal `facing[i]` ([`emission_facing`]) is not listed in the tiles that
-    /// lie wholly behind it.
+    /// Bins `lights` (light i of sub-image `sub[i]` < n^2) into the tiles of their
+    /// sub-image, in parallel over sub-images.
     #[must_use]
     pub fn build(
         g: &GBuffer,
         frame: &CameraFrame,
         tile: u32,
         n: u32,
-        lights: (&[Vec3], &[f32], &[Vec3]),
+        lights: BinLights<'_>,
         sub: &[u16],
     ) -> Self {
         let n = n.max(1);
@@ -440,7 +474,7 @@ impl InterleavedBins {
         g: &GBuffer,
         frame: &CameraFrame,
         all: &AllBounds,
-        (centres, radii, facing): (&[Vec3], &[f32], &[Vec3]),
+        lights: BinLights<'_>,
         sub: &[u16],
     ) -> Self {
         let n = all.n;
@@ -452,14 +486,22 @@ impl InterleavedBins {
             .par_iter()
             .enumerate()
             .map(|(s, m)| {
-                let c: Vec<Vec3> = m.iter().map(|&i| centres[i as usize]).collect();
-                let r: Vec<f32> = m.iter().map(|&i| radii[i as usize]).collect();
-                let f: Vec<Vec3> = if facing.is_empty() {
-                    Vec::new()
-                } else {
-                    m.iter().map(|&i| facing[i as usize]).collect()
+                // This sub-image's lights' values of `of` (none where `of` is empty).
+                fn pick<T: Copy>(of: &[T], m: &[u32]) -> Vec<T> {
+                    if of.is_empty() {
+                        return Vec::new();
+                    }
+                    m.iter().map(|&i| of[i as usize]).collect()
+                }
+                let (c, r) = (pick(lights.centres, m), pick(lights.radii, m));
+                let (f, h) = (pick(lights.facing, m), pick(lights.holes, m));
+                let mine = BinLights {
+                    centres: &c,
+                    radii: &r,
+                    facing: &f,
+                    holes: &h,
                 };
-                TileBins::from_bounds(g, frame, all, s, (&c, &r, &f))
+                TileBins::from_bounds(g, frame, all, s, mine)
             })
             .collect();
         Self { n, members, bins }
@@ -576,7 +618,14 @@ mod tests {
         let radii = vec![f32::INFINITY; count];
         for n in [1u32, 2, 4] {
             let sub: Vec<u16> = (0..count).map(|i| (i % (n * n) as usize) as u16).collect();
-            let bins = InterleavedBins::build(&g, &frame, 4, n, (&centres, &radii, &[]), &sub);
+            let bins = InterleavedBins::build(
+                &g,
+                &frame,
+                4,
+                n,
+                BinLights::spheres(&centres, &radii),
+                &sub,
+            );
             let mut seen = vec![0u32; count];
             for y in 0..n {
                 for x in 0..n {

@@ -4,8 +4,9 @@
 
 @group(0) @binding(0) var<uniform> P: BinParams;
 @group(0) @binding(1) var<uniform> C: Camera;
-// Per light: centre and radius (finite; see the flags), then the emission normal it is
-// culled by (zero: none; lgh-render's emission_facing).
+// Per light: centre and radius (finite; see the flags), then the normal of the plane behind
+// which it gives nothing (zero: none; lgh-render's BinLights::facing) and the distance
+// within which it gives nothing (BinLights::holes).
 @group(0) @binding(2) var<storage, read> spheres: array<vec4<f32>>;
 // Per light: its sub-image and flags.
 @group(0) @binding(3) var<storage, read> flags: array<u32>;
@@ -76,11 +77,11 @@ fn light_span(i: u32) -> Span {
 }
 
 // False only if no surface point of the tile of bounds `b` can lie in light i's sphere in
-// front of its tangent plane and, for a light with emission normal m, in front of the
-// light's own plane (lgh-render's TileBounds::may_reach).
+// front of its tangent plane and, for a light with normal m, in front of the light's own
+// plane, and farther than `hole` from it (lgh-render's TileBounds::may_reach).
 // A light of infinite reach is kept by an empty tile and by a tile with an empty slice, as
 // the CPU's infinities keep it, and otherwise only by the tangent-plane test.
-fn may_reach(b: TileBounds, s: Span, c: vec3<f32>, r: f32, m: vec3<f32>) -> bool {
+fn may_reach(b: TileBounds, s: Span, c: vec3<f32>, r: f32, m: vec3<f32>, hole: f32) -> bool {
     let facing = any(m != vec3<f32>(0.0));
     if (b.z.z == 0.0) {
         return s.everywhere;
@@ -107,7 +108,8 @@ fn may_reach(b: TileBounds, s: Span, c: vec3<f32>, r: f32, m: vec3<f32>) -> bool
         // The greatest m . (x - c) over the box.
         let front = max((lo - c) * m, (hi - c) * m);
         let unlit = facing && front.x + front.y + front.z + allowance <= 0.0;
-        if ((s.everywhere || dot(d, d) <= r * r) && !behind && !unlit) {
+        let inside = far + allowance < hole;
+        if ((s.everywhere || dot(d, d) <= r * r) && !behind && !unlit && !inside) {
             return true;
         }
     }
@@ -127,10 +129,11 @@ fn visit_listings(first: u32, stride: u32) {
         let c = spheres[2u * i].xyz;
         let r = spheres[2u * i].w;
         let m = spheres[2u * i + 1u].xyz;
+        let hole = spheres[2u * i + 1u].w;
         for (var ty = s.lo.y; ty <= s.hi.y; ty++) {
             for (var tx = s.lo.x; tx <= s.hi.x; tx++) {
                 let l = list_of(i, tx, ty);
-                if (may_reach(bounds[l], s, c, r, m)) {
+                if (may_reach(bounds[l], s, c, r, m, hole)) {
                     listed(i, l);
                 }
             }

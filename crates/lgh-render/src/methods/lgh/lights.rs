@@ -20,6 +20,7 @@ use crate::methods::lgh::tables::{DeviceKeeps, GridTables};
 use crate::passes::gbuffer::GBuffer;
 use crate::shading::reservoirs::{ShadowReservoirs, ShadowSample};
 use crate::shading::shadow_pass::Targets;
+use crate::shading::tiles::emission_facing;
 
 /// Random-stream tag of the shadow targets drawn after selection.
 const STREAM_TARGET: u64 = 0x162;
@@ -63,6 +64,21 @@ pub(super) struct ShadeLights {
     /// The lights a builder's device holds and makes the loop's rows of itself (none of
     /// them in the arrays above, which are then empty: [`ShadeLights::add_on_device`]).
     on_device: usize,
+}
+
+impl ShadeLights {
+    /// What the tile binning culls each light by besides its sphere: the normal of the
+    /// plane behind which it gives nothing ([`emission_facing`]), and the distance within
+    /// which its blending weight is zero ([`LevelRole::hole`]).
+    pub(super) fn bin_extras(&self) -> (Vec<Vec3>, Vec<f32>) {
+        let facing = (self.normal.par_iter().zip(&self.iso))
+            .map(|(&m, &iso)| emission_facing(m, iso))
+            .collect();
+        let holes = (self.role.par_iter().zip(&self.radius))
+            .map(|(&role, &r)| role.hole(r))
+            .collect();
+        (facing, holes)
+    }
 }
 
 /// One hierarchy as the unbiased estimate reads it (docs/design.md, "Unbiased estimate"):

@@ -33,7 +33,7 @@ use crate::shading::ratio::{
 };
 use crate::shading::reservoirs::ReservoirLayout;
 use crate::shading::shadow_pass::{ShadowEstimates, ShadowPass, Targets};
-use crate::shading::tiles::{AllBounds, InterleavedBins, emission_facing};
+use crate::shading::tiles::{AllBounds, BinLights, InterleavedBins};
 
 /// Random-stream tag of the grid offset of `--grid-jitter`.
 const STREAM_GRID_SHIFT: u64 = 0x6a1d;
@@ -70,7 +70,7 @@ pub struct LghFrame {
 }
 
 /// The shaded lights as the tile binning reads them ([`LghFrame::spheres`]).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct LightSpheres<'a> {
     /// The number of lights: the arrays' length, or where a builder's device holds the
     /// lights and makes their spheres there, theirs (the arrays are then empty).
@@ -81,12 +81,11 @@ pub struct LightSpheres<'a> {
     pub radii: &'a [f32],
     /// Sub-image of each light.
     pub sub: &'a [u16],
-    /// Emission normal m and isotropic share of each light: the binning also drops a
-    /// light from the tiles behind its plane where it emits nothing there
-    /// ([`crate::shading::tiles::emission_facing`]).
-    pub normals: &'a [Vec3],
-    /// See `normals`.
-    pub iso: &'a [f32],
+    /// Per light, the normal of the plane behind which it gives nothing, or zero
+    /// ([`BinLights::facing`]).
+    pub facing: Vec<Vec3>,
+    /// Per light, the distance within which it gives nothing ([`BinLights::holes`]).
+    pub holes: Vec<f32>,
     /// Interleaving n.
     pub n: u32,
     /// Tile edge in sub-image pixels.
@@ -107,17 +106,17 @@ fn bin(
     let bounds = memory
         .tile_bounds
         .get_or_insert_with(g, [n, tile, 0, 0], || AllBounds::new(g, n, tile * n));
-    let facing: Vec<Vec3> = lights
-        .normal
-        .par_iter()
-        .zip(&lights.iso)
-        .map(|(&m, &iso)| emission_facing(m, iso))
-        .collect();
+    let (facing, holes) = lights.bin_extras();
     InterleavedBins::from_bounds(
         g,
         inputs.camera,
         bounds,
-        (&lights.position, &lights.reach, &facing),
+        BinLights {
+            centres: &lights.position,
+            radii: &lights.reach,
+            facing: &facing,
+            holes: &holes,
+        },
         &lights.sub,
     )
 }
@@ -356,18 +355,19 @@ impl LghFrame {
 
     /// What the tile binning reads, for a backend that bins the lights itself: light i is a
     /// sphere (`centres[i]`, `radii[i]`; infinite radius: everywhere, negative or NaN:
-    /// nowhere) of sub-image `sub[i]`, with emission normal `normals[i]` and isotropic share
-    /// `iso[i]`, binned into tiles of `tile` sub-image pixels under `n` x `n` interleaving
-    /// ([`InterleavedBins::build`]).
+    /// nowhere) of sub-image `sub[i]`, giving nothing behind the plane of normal
+    /// `facing[i]` nor within `holes[i]` of its centre, binned into tiles of `tile`
+    /// sub-image pixels under `n` x `n` interleaving ([`InterleavedBins::build`]).
     #[must_use]
     pub fn spheres(&self) -> LightSpheres<'_> {
+        let (facing, holes) = self.lights.bin_extras();
         LightSpheres {
             count: self.lights.len(),
             centres: &self.lights.position,
             radii: &self.lights.reach,
             sub: &self.lights.sub,
-            normals: &self.lights.normal,
-            iso: &self.lights.iso,
+            facing,
+            holes,
             n: self.n,
             tile: self.tile,
         }

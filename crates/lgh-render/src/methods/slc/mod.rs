@@ -39,7 +39,7 @@ use crate::settings::{ErrorBound, RenderError};
 use crate::shading::ratio::shadowed_indirect;
 use crate::shading::reservoirs::{ReservoirLayout, ShadowSample, offer};
 use crate::shading::shadow_pass::ShadowPass;
-use crate::shading::tiles::InterleavedBins;
+use crate::shading::tiles::{BinLights, InterleavedBins};
 
 pub mod ism;
 
@@ -238,14 +238,17 @@ pub fn render_slc(
     // Step 2: per sub-image, its lights (i = s mod n^2) binned into its tiles.
     let bins = t.time("culling", || {
         let sub: Vec<u16> = (0..vpls.len()).map(|i| (i % n2) as u16).collect();
-        // A VPL emits nothing behind its plane.
-        let facing = &vpls.normals;
+
         InterleavedBins::build(
             g,
             inputs.camera,
             all.tiling.tile.unwrap_or(DEFAULT_TILE),
             n,
-            (&vpls.positions, &ranges.range, facing),
+            BinLights {
+                // A VPL emits nothing behind its plane.
+                facing: &vpls.normals,
+                ..BinLights::spheres(&vpls.positions, &ranges.range)
+            },
             &sub,
         )
     });
