@@ -15,7 +15,8 @@
 # `lgh` to use instead of building one, for machines without cargo).
 # Each step that fails or runs out of time is recorded as {"error": ...} and the rest go on.
 # Each scene also runs its first VPL count with the camera moving (the A and D keys
-# alternating), where the still camera's G-buffer and edge resolve are made every frame.
+# alternating), where the still camera's G-buffer and edge resolve are made every frame,
+# and with one hierarchy per normal bin (the render's default; VPLs split on the GPU).
 # Takes about 2 minutes after the build on a current GPU and 16 cores; lavapipe's times are
 # no measure of a GPU (use SIZE=160x90 VPLS=10000 FRAMES=3 there to check the script).
 set -uo pipefail
@@ -83,6 +84,12 @@ for i in "${!scenes[@]}"; do
         --shadow-samples 4 --light-speed 2 --keys "$keys" --device gpu --frames "$frames" \
         --stats "$tmp/$name-gpu.json"
     cases+=("{\"scene\": \"${names[$i]}\", \"vpls\": $n, \"camera\": \"moving\", \"view\": $(cat "$tmp/$name-gpu.json"), \"view_cpu\": null}")
+    # One hierarchy per normal bin (the render's default), the VPLs split on the GPU.
+    name="${names[$i]}-$n-bins"
+    step "$name-gpu" "$lgh" view "${scenes[$i]}" --headless --size "$size" --vpls "$n" \
+        --shadow-samples 4 --light-speed 2 --normal-bins=true --device gpu --frames "$frames" \
+        --stats "$tmp/$name-gpu.json"
+    cases+=("{\"scene\": \"${names[$i]}\", \"vpls\": $n, \"camera\": \"still, normal bins\", \"view\": $(cat "$tmp/$name-gpu.json"), \"view_cpu\": null}")
 done
 
 # The hierarchy build of the VPLs of each scene, 100K and 1M, on the GPU and on the CPU
