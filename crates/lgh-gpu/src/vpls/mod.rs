@@ -155,7 +155,7 @@ fn generate<'c>(
     }
     let out = ctx.output("vpls", out_bytes)?;
     let status = ctx.output("vpl status", 16)?;
-    let [paths_src, compact_src, ..] = sources();
+    let [paths_src, compact_src, grid_src, bins_src] = sources();
     let paths_kernel = ctx.pipeline("vpl paths", || paths_src);
     let compact_kernel = ctx.pipeline("vpl compact", || compact_src);
     let set_seed = path_seed(seed);
@@ -245,7 +245,8 @@ fn generate<'c>(
     let mut batch = Batch::new(ctx);
     let bins = want == Want::GridBins;
     let grid_in = if want != Want::Cpu && done > 0 {
-        let (lights, bounds) = to_grid_layout(ctx, &mut batch, (&out, done, scale), bins)?;
+        let kernels = (grid_src, bins.then_some(bins_src));
+        let (lights, bounds) = to_grid_layout(ctx, &mut batch, (&out, done, scale), kernels)?;
         if want != Want::CpuAndGrid {
             batch.read(bounds.buffer(), bounds.bytes())?;
         }
@@ -340,7 +341,8 @@ fn held_parts(words: &[u32], bins: usize) -> Vec<resident::Part> {
 
 /// Records into `batch` the conversion of `count` light-path records in `records` (flux
 /// scaled by `scale`) into the hierarchy build's layout (`shaders/vpl_grid.wgsl`), sorted
-/// by normal bin with `bins` (`shaders/vpl_bins.wgsl`, then [`crate::scan`]); returns the
+/// by normal bin where the split's kernel is given (`shaders/vpl_bins.wgsl`, then
+/// [`crate::scan`]; the kernels' sources are [`sources`]'s, made once a frame); returns the
 /// lights and their bounds' words ([`BIN_WORDS`] per bin, six bins).
 ///
 /// # Errors
@@ -349,9 +351,8 @@ fn to_grid_layout<'c>(
     ctx: &'c GpuContext,
     batch: &mut Batch<'c>,
     (records, count, scale): (&Lease<'c>, u64, f32),
-    bins: bool,
+    (grid_src, bins_src): (String, Option<String>),
 ) -> Result<(Lease<'c>, Lease<'c>), GpuError> {
-    let [_, _, grid_src, bins_src] = sources();
     let lights = ctx.lease(
         crate::grid::LIGHTS_IN,
         count * crate::grid::LIGHT_BYTES,
@@ -362,7 +363,8 @@ fn to_grid_layout<'c>(
     let empty: Vec<u32> = [max, max, max, 0, 0, 0, max, 0].repeat(NORMAL_BINS);
     let bounds = ctx.upload("vpl bounds", &empty)?;
     let words = count.div_ceil(32);
-    let (bits, prefix) = if bins {
+    let bins = bins_src.is_some();
+    let (bits, prefix) = if let Some(bins_src) = bins_src {
         let n = NORMAL_BINS as u64 * words;
         let (bits, prefix) = (
             ctx.output("vpl bins", 4 * n)?,
