@@ -161,6 +161,12 @@ impl<'c> Batch<'c> {
         Ok(())
     }
 
+    /// The number of read-backs recorded so far (the index the next one will have in
+    /// [`Batch::finish`]'s output).
+    pub(crate) fn reads(&self) -> usize {
+        self.reads.len()
+    }
+
     /// Submits the batch without waiting for it, for work that only later submissions read
     /// (the queue runs them in order): a batch without [`Batch::read`]s; its passes' times
     /// are not kept.

@@ -61,6 +61,8 @@ pub struct GpuContext {
     grids: crate::grid::GridStates,
     /// The frame's VPLs kept for its hierarchy build ([`crate::vpls`]).
     resident_vpls: crate::vpls::resident::Slots,
+    /// The running means and emission of shown frames ([`crate::display`]).
+    display: crate::display::DisplayStates,
 }
 
 impl GpuContext {
@@ -102,6 +104,7 @@ impl GpuContext {
             gbuffers: GBufferCache::default(),
             grids: crate::grid::GridStates::default(),
             resident_vpls: crate::vpls::resident::Slots::default(),
+            display: crate::display::DisplayStates::default(),
         })
     }
 
@@ -253,6 +256,11 @@ impl GpuContext {
     /// The frame's VPLs kept for its hierarchy build.
     pub(crate) fn resident_vpls(&self) -> &crate::vpls::resident::Slots {
         &self.resident_vpls
+    }
+
+    /// What shown frames keep between frames.
+    pub(crate) fn display_states(&self) -> &crate::display::DisplayStates {
+        &self.display
     }
 
     /// The pool of buffers kept between frames.

@@ -35,6 +35,7 @@ pub mod atrous;
 pub mod bins;
 pub mod brute;
 pub mod direct;
+pub mod display;
 pub mod edges;
 pub mod lgh;
 pub mod primary;

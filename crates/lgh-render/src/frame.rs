@@ -24,13 +24,15 @@ use lgh_scene::camera::CameraFrame;
 use rayon::prelude::*;
 
 use crate::direct::render_direct;
+use crate::display::{DisplayRequest, Displayed, ShowInputs};
 use crate::image::Image;
-use crate::memory::FrameMemory;
+use crate::memory::{FrameMemory, ViewCache};
 use crate::methods::{Illumination, MethodInputs, MethodOutput, MethodStats};
 use crate::passes::edge_aa::EdgeResolve;
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::vpl_gen::{VplSet, generate_vpls};
 use crate::progress::Progress;
+use crate::region::Region;
 use crate::settings::{Component, RenderError, RenderSettings};
 use crate::shading::ratio::ShadowRatio;
 use crate::world::World;
@@ -58,6 +60,9 @@ pub struct Frame {
     pub gbuffer: GBuffer,
     /// The camera of the frame.
     pub camera: CameraFrame,
+    /// The frame as its method's backend showed it ([`render_frame_shown`]); its images
+    /// are then empty (their sizes kept).
+    pub shown: Option<Displayed>,
 }
 
 /// The output image of `component` from a frame's parts.
@@ -126,6 +131,36 @@ pub fn render_frame_with(
     progress: &dyn Progress,
     memory: &mut FrameMemory,
 ) -> Result<Frame, RenderError> {
+    recipe(world, s, progress, memory, None)
+}
+
+/// [`render_frame_with`] for a viewer that shows the frame as `request` asks: where the
+/// method's backend shows frames itself ([`crate::methods::IndirectMethod::render_shown`]: lgh-gpu's
+/// `lgh`, for the components [`Component::All`] and [`Component::Indirect`]), the frame
+/// is composed, added to that backend's running mean and tone-mapped there, and comes back
+/// as [`Frame::shown`] with its images empty (their sizes kept): only the packed pixels
+/// cross from the device. Else the frame is rendered as [`render_frame_with`] renders it,
+/// `shown` is `None`, and the caller shows it ([`crate::display::RunningMean`]).
+///
+/// # Errors
+/// As [`render_frame`].
+pub fn render_frame_shown(
+    world: &World,
+    s: &RenderSettings,
+    progress: &dyn Progress,
+    memory: &mut FrameMemory,
+    request: DisplayRequest,
+) -> Result<Frame, RenderError> {
+    recipe(world, s, progress, memory, Some(request))
+}
+
+fn recipe(
+    world: &World,
+    s: &RenderSettings,
+    progress: &dyn Progress,
+    memory: &mut FrameMemory,
+    request: Option<DisplayRequest>,
+) -> Result<Frame, RenderError> {
     s.validate()?;
     let start = Instant::now();
     let mut t = Timings::default();
@@ -161,6 +196,13 @@ pub fn render_frame_with(
             })
         })?
     };
+    if let Some(request) = request.filter(|_| !all_reflected && s.component != Component::Direct) {
+        let shown = show(world, s, progress, memory, &camera, &g, &vpls, request);
+        if let Some((out, displayed, shown_t)) = shown? {
+            t.0.extend(shown_t.0);
+            return Ok(shown_frame(s, start, t, g, vpls, out, displayed, camera));
+        }
+    }
     // The indirect component alone does not need the direct pass (about a third of a
     // 1280x720 frame), and a path tracer computes it itself.
     let direct = if s.component == Component::Indirect || all_reflected {
@@ -203,32 +245,16 @@ pub fn render_frame_with(
     let mut indirect = std::mem::take(&mut out.radiance);
     if s.edge_samples > 1 {
         t.time("edge_aa", || {
-            let mut apply = |resolve: &EdgeResolve| {
-                for image in [&mut emission, &mut direct, &mut indirect] {
-                    resolve.apply(image);
-                }
-            };
-            let make = || EdgeResolve::new(world, &camera, &g, s.edge_samples, keep.as_ref());
-            match keep {
-                // A piece of a frame resolves its own rectangle.
-                Some(_) => apply(&make()),
-                // The method's backend may find it (kept while the view stands still).
-                None => {
-                    let cache = &mut memory.edge_resolve;
-                    let params = [s.edge_samples, 0, 0, 0];
-                    if !cache.holds(&g, params) {
-                        let method = s.method.get();
-                        match method.edge_resolve(world, &camera, &g, s.edge_samples)? {
-                            Some(r) if g.view.is_some() => cache.insert(&g, params, r),
-                            Some(r) => {
-                                apply(&r);
-                                return Ok(());
-                            }
-                            None => {}
-                        }
-                    }
-                    apply(cache.get_or_insert_with(&g, params, make));
-                }
+            let resolve = find_edges(
+                world,
+                &camera,
+                &g,
+                s,
+                keep.as_ref(),
+                &mut memory.edge_resolve,
+            )?;
+            for image in [&mut emission, &mut direct, &mut indirect] {
+                resolve.get().apply(image);
             }
             Ok::<_, RenderError>(())
         })?;
@@ -249,5 +275,133 @@ pub fn render_frame_with(
         method: out,
         gbuffer: g,
         camera,
+        shown: None,
     })
+}
+
+/// The edge resolve of a frame: made for it, or kept in the frame memory.
+enum Resolve<'m> {
+    Made(EdgeResolve),
+    Kept(&'m EdgeResolve),
+}
+
+impl Resolve<'_> {
+    fn get(&self) -> &EdgeResolve {
+        match self {
+            Self::Made(r) => r,
+            Self::Kept(r) => r,
+        }
+    }
+}
+
+/// The resolve of the edges of `g` with `s.edge_samples` sub-pixel rays: a piece of a
+/// frame (`keep`) resolves its own rectangle; a whole frame's is found by the method's
+/// backend where it can, and kept in `cache` while the view stands still.
+fn find_edges<'m>(
+    world: &World,
+    camera: &CameraFrame,
+    g: &GBuffer,
+    s: &RenderSettings,
+    keep: Option<&Region>,
+    cache: &'m mut ViewCache<EdgeResolve>,
+) -> Result<Resolve<'m>, RenderError> {
+    let make = || EdgeResolve::new(world, camera, g, s.edge_samples, keep);
+    if keep.is_some() {
+        return Ok(Resolve::Made(make()));
+    }
+    let params = [s.edge_samples, 0, 0, 0];
+    if !cache.holds(g, params) {
+        match s
+            .method
+            .get()
+            .edge_resolve(world, camera, g, s.edge_samples)?
+        {
+            Some(r) if g.view.is_some() => cache.insert(g, params, r),
+            Some(r) => return Ok(Resolve::Made(r)),
+            None => {}
+        }
+    }
+    Ok(Resolve::Kept(cache.get_or_insert_with(g, params, make)))
+}
+
+/// The frame's direct and indirect light rendered and shown by the method's backend
+/// ([`crate::methods::IndirectMethod::render_shown`]), with the edges resolved there; `None` where the
+/// backend does not show frames. The timings: `edge_aa` (finding the edges) and `indirect`
+/// (all the rest), with the method's own.
+#[allow(clippy::too_many_arguments)]
+fn show(
+    world: &World,
+    s: &RenderSettings,
+    progress: &dyn Progress,
+    memory: &mut FrameMemory,
+    camera: &CameraFrame,
+    g: &GBuffer,
+    vpls: &VplSet,
+    request: DisplayRequest,
+) -> Result<Option<(MethodOutput, Displayed, Timings)>, RenderError> {
+    let mut t = Timings::default();
+    let mut cache = std::mem::take(&mut memory.edge_resolve);
+    let edges = if s.edge_samples > 1 {
+        Some(t.time("edge_aa", || {
+            find_edges(world, camera, g, s, None, &mut cache)
+        })?)
+    } else {
+        None
+    };
+    let inputs = MethodInputs {
+        world,
+        gbuffer: g,
+        camera,
+        vpls: &vpls.vpls,
+        vpl_count: vpls.len(),
+        vpl_bins: vpls.kept_bins,
+        settings: s,
+        progress,
+    };
+    let all = s.component == Component::All;
+    let show = ShowInputs {
+        direct: all,
+        emission: all,
+        edges: edges.as_ref().map(Resolve::get),
+        request,
+    };
+    let shown = t.time("indirect", || {
+        s.method.get().render_shown(&inputs, &show, memory)
+    });
+    drop(edges);
+    memory.edge_resolve = cache;
+    Ok(shown?.map(|(out, displayed)| (out, displayed, t)))
+}
+
+/// The frame shown by its method's backend: its images empty, of its size.
+#[allow(clippy::too_many_arguments)]
+fn shown_frame(
+    s: &RenderSettings,
+    start: Instant,
+    mut t: Timings,
+    gbuffer: GBuffer,
+    vpls: VplSet,
+    mut method: MethodOutput,
+    shown: Displayed,
+    camera: CameraFrame,
+) -> Frame {
+    let empty = || Image {
+        width: s.width,
+        height: s.height,
+        pixels: Vec::new(),
+    };
+    t.0.extend(std::mem::take(&mut method.timings.0));
+    t.0.push(("total".into(), start.elapsed().as_secs_f64() * 1e3));
+    Frame {
+        image: empty(),
+        emission: empty(),
+        direct: empty(),
+        indirect: empty(),
+        vpls,
+        timings: t,
+        method,
+        gbuffer,
+        camera,
+        shown: Some(shown),
+    }
 }

@@ -59,6 +59,7 @@ pub mod accumulate;
 pub mod budget;
 pub mod denoise;
 pub mod direct;
+pub mod display;
 pub mod frame;
 pub mod image;
 pub mod memory;
@@ -73,7 +74,7 @@ pub mod settings;
 pub mod shading;
 pub mod world;
 
-pub use frame::{Frame, render_frame, render_frame_with};
+pub use frame::{Frame, render_frame, render_frame_shown, render_frame_with};
 pub use image::Image;
 pub use memory::FrameMemory;
 pub use methods::{METHODS, Method, MethodOutput};

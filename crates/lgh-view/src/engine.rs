@@ -7,15 +7,16 @@
 
 use std::time::Instant;
 
-use glam::Vec3;
 use lgh_render::accumulate::frame_settings;
+use lgh_render::display::{DisplayRequest, RunningMean, pack_pixel};
 use lgh_render::image::heat::{HEAT_EXPOSURE, heat_map};
-use lgh_render::image::tonemap::tonemap_pixel;
 use lgh_render::methods::lgh::LghStats;
 use lgh_render::sequence::Sequence;
 use lgh_render::settings::MethodMap;
 use lgh_render::world::accel::AccelKind;
-use lgh_render::{FrameMemory, Image, RenderError, Silent, World, render_frame_with};
+use lgh_render::{
+    FrameMemory, Image, RenderError, Silent, World, render_frame_shown, render_frame_with,
+};
 use lgh_scene::{Light, Scene};
 use rayon::prelude::*;
 
@@ -24,7 +25,8 @@ use crate::state::ViewState;
 /// A frame ready to show.
 #[derive(Clone, Debug)]
 pub struct ShownFrame {
-    /// The linear image shown (the running mean while still).
+    /// The linear image shown (the running mean while still); empty (its size kept) for a
+    /// frame shown on the GPU without [`FrameLoop::with_linear`].
     pub image: Image,
     /// The image tone-mapped, one `0x00RRGGBB` per pixel (softbuffer's layout).
     pub pixels: Vec<u32>,
@@ -49,14 +51,29 @@ pub struct ShownFrame {
     pub device: &'static str,
 }
 
+/// Where the running mean of a view's frames is kept.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum MeanAt {
+    /// No running mean holds the last frame (the first frame, a heat map).
+    Nowhere,
+    /// The CPU's ([`RunningMean`]).
+    Cpu,
+    /// The GPU's: the frame was shown there ([`render_frame_shown`]).
+    Gpu,
+}
+
 /// Renders the frames of a view.
 pub struct FrameLoop {
     world: World,
     rest_lights: Vec<Light>,
     sequence: Sequence,
     memory: FrameMemory,
-    sum: Vec<Vec3>,
+    mean: RunningMean,
     accumulated: u32,
+    /// Where the running mean that holds the last frame is.
+    mean_at: MeanAt,
+    /// Shown frames bring back their linear image (an EXR screenshot needs it).
+    linear: bool,
     shown_version: Option<u64>,
     frame: u64,
     exposure: f32,
@@ -82,8 +99,10 @@ impl FrameLoop {
             rest_lights,
             sequence: Sequence::new(None),
             memory: FrameMemory::default(),
-            sum: Vec::new(),
+            mean: RunningMean::default(),
             accumulated: 0,
+            mean_at: MeanAt::Nowhere,
+            linear: false,
             shown_version: None,
             frame: 0,
             exposure,
@@ -96,6 +115,14 @@ impl FrameLoop {
     #[must_use]
     pub fn with_backend(self, backend: Option<MethodMap>) -> Self {
         Self { backend, ..self }
+    }
+
+    /// The same loop with frames shown on the GPU bringing back their linear image too
+    /// (else only their packed pixels come back, and [`ShownFrame::image`] is empty): an
+    /// EXR screenshot needs it.
+    #[must_use]
+    pub fn with_linear(self, linear: bool) -> Self {
+        Self { linear, ..self }
     }
 
     /// The world rendered (its scene, radius and centre).
@@ -144,7 +171,19 @@ impl FrameLoop {
         if let Some(m) = self.backend.and_then(|map| map(&settings)) {
             (settings.method, device) = (m, "gpu");
         }
-        let mut frame = if still || !state.taa {
+        // A GPU frame is shown where it was made (only its packed pixels come back), as
+        // long as the view shows the frame itself (not the heat map, not a sequence
+        // through the CPU's temporal filter); its running mean restarts where the last
+        // frame's was on the CPU.
+        let request =
+            (device == "gpu" && !state.heatmap && (still || !state.taa)).then(|| DisplayRequest {
+                exposure: self.exposure,
+                restart: self.accumulated == 0 || self.mean_at != MeanAt::Gpu,
+                linear: self.linear,
+            });
+        let mut frame = if let Some(request) = request {
+            render_frame_shown(&self.world, &settings, &Silent, &mut self.memory, request)?
+        } else if still || !state.taa {
             render_frame_with(&self.world, &settings, &Silent, &mut self.memory)?
         } else {
             self.sequence.taa = Some(Default::default());
@@ -152,44 +191,41 @@ impl FrameLoop {
         };
         self.shown_version = Some(state.version);
         let display_start = Instant::now();
-        let pixels = &mut frame.image.pixels;
-        if self.accumulated == 0 || self.sum.len() != pixels.len() {
-            // The frame's own image starts the sum: no copy.
-            self.sum = std::mem::take(pixels);
-            self.accumulated = 1;
-        } else {
-            self.sum
-                .par_iter_mut()
-                .zip(pixels.par_iter())
-                .for_each(|(s, p)| *s += *p);
-            self.accumulated += 1;
-        }
         let mut exposure = self.exposure;
         let mut overdraw = None;
         let heat = state
             .heatmap
             .then_some(frame.method.lights_per_pixel.as_ref())
             .flatten();
-        // The mean and its tone-mapped pixels in one pass (or the heat map's).
-        let pack = |p: Vec3, exposure: f32| {
-            let [r, g, b] = tonemap_pixel(p, exposure);
-            (u32::from(r) << 16) | (u32::from(g) << 8) | u32::from(b)
-        };
-        let (mean, packed): (Vec<Vec3>, Vec<u32>) = if let Some(counts) = heat {
+        let (mean, packed) = if let Some(shown) = frame.shown.take() {
+            self.accumulated = shown.frames;
+            self.mean_at = MeanAt::Gpu;
+            (shown.mean.unwrap_or_default(), shown.pixels)
+        } else if let Some(counts) = heat {
+            // The heat map stands for the frame (a running mean restarts after it).
+            self.accumulated += 1;
+            self.mean_at = MeanAt::Nowhere;
             let (colours, max) = heat_map(counts);
             overdraw = Some((frame.gbuffer.mean_over_hits(counts), max));
             exposure = HEAT_EXPOSURE;
-            let packed = colours.par_iter().map(|&c| pack(c, exposure)).collect();
+            let packed = colours
+                .par_iter()
+                .map(|&c| pack_pixel(c, exposure))
+                .collect();
             (colours, packed)
         } else {
-            let inv = 1.0 / self.accumulated as f32;
-            self.sum
-                .par_iter()
-                .map(|&s| {
-                    let m = s * inv;
-                    (m, pack(m, exposure))
-                })
-                .unzip()
+            // The CPU's running mean (restarted where the last frame's was on the GPU).
+            let request = DisplayRequest {
+                exposure,
+                restart: self.accumulated == 0 || self.mean_at != MeanAt::Cpu,
+                linear: true,
+            };
+            let shown = self
+                .mean
+                .show(std::mem::take(&mut frame.image.pixels), &request);
+            self.accumulated = shown.frames;
+            self.mean_at = MeanAt::Cpu;
+            (shown.mean.unwrap_or_default(), shown.pixels)
         };
         let lgh_stats = frame.stats::<LghStats>();
         let mut timings = frame.timings.0.clone();
@@ -198,7 +234,11 @@ impl FrameLoop {
             display_start.elapsed().as_secs_f64() * 1e3,
         ));
         let shown = ShownFrame {
-            image: Image::from_pixels(frame.image.width, frame.image.height, mean),
+            image: Image {
+                width: frame.image.width,
+                height: frame.image.height,
+                pixels: mean,
+            },
             pixels: packed,
             exposure,
             timings,

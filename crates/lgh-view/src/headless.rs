@@ -111,7 +111,19 @@ pub fn check_keys(keys: &[String]) -> Result<()> {
 /// A file cannot be written.
 pub fn finish(args: &ViewArgs, state: &ViewState, record: &Record) -> Result<()> {
     if let (Some(path), Some(last)) = (&args.screenshot, record.last()) {
-        last.image.save(path, last.exposure)?;
+        if last.image.pixels.is_empty() {
+            // A frame shown on the GPU: its packed pixels are the PNG's (an EXR screenshot
+            // brings the linear image back, `FrameLoop::with_linear`).
+            let rgb: Vec<u8> = last
+                .pixels
+                .iter()
+                .flat_map(|p| [(p >> 16) as u8, (p >> 8) as u8, *p as u8])
+                .collect();
+            let (w, h) = (last.image.width, last.image.height);
+            lgh_render::image::save_png(path, w, h, &rgb)?;
+        } else {
+            last.image.save(path, last.exposure)?;
+        }
     }
     if let Some(path) = &args.stats {
         write_json(path, &record.stats(args, state))?;
@@ -158,7 +170,14 @@ pub fn start(args: &ViewArgs, scene: Scene) -> Result<(FrameLoop, ViewState)> {
         (Device::Gpu, Some(map)) => Some(map),
         (Device::Gpu, None) => bail!("--device gpu: this program has no GPU backend"),
     };
-    let engine = FrameLoop::new(scene, settings.exposure, args.accel.kind())?.with_backend(backend);
+    use lgh_render::image::ImageFormat;
+    let exr = args
+        .screenshot
+        .as_ref()
+        .is_some_and(|p| matches!(ImageFormat::from_path(p), Ok(ImageFormat::Exr)));
+    let engine = FrameLoop::new(scene, settings.exposure, args.accel.kind())?
+        .with_backend(backend)
+        .with_linear(exr);
     let state = ViewState::new(settings, &camera, engine.world().radius, args.taa);
     Ok((engine, state))
 }

@@ -26,6 +26,7 @@ use lgh_scene::Light;
 use crate::atrous::{Geometry, record};
 use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
+use crate::pool::Lease;
 
 /// Area samples per pixel the GPU pass takes at most (more run on the CPU).
 pub const MAX_AREA_SAMPLES: u32 = 4096;
@@ -215,10 +216,42 @@ pub fn render_direct(
     g: &GBuffer,
     s: &RenderSettings,
 ) -> Result<Option<DirectOutput>, GpuError> {
+    let start = Instant::now();
+    let n = g.len();
+    let mut batch = Batch::new(ctx);
+    let Some(radiance) = record_direct(ctx, &mut batch, world, g, s)? else {
+        return Ok(None);
+    };
+    batch.read(radiance.buffer(), radiance.bytes())?;
+    let (reads, gpu) = batch.finish()?;
+    let out: &[Vec4] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
+    let radiance: Vec<Vec3> = out.iter().take(n).map(|v| v.truncate()).collect();
+    let mut timings = Timings::default();
+    for &(name, ms) in &gpu {
+        timings.push(name, ms);
+    }
+    let gpu_ms: f64 = gpu.iter().map(|(_, ms)| ms).sum();
+    let wall = start.elapsed().as_secs_f64() * 1e3;
+    timings.push("direct_transfer", (wall - gpu_ms).max(0.0));
+    Ok(Some(DirectOutput { radiance, timings }))
+}
+
+/// Records the direct light of the frame with G-buffer `g` into `batch` (the passes
+/// `direct_samples`, `direct_filter`, `direct_composite`): the buffer it writes, one vec4
+/// of radiance a pixel, which stays on the GPU. `Ok(None)` where [`supported`] is false.
+///
+/// # Errors
+/// The frame exceeds the adapter's limits.
+pub(crate) fn record_direct<'c>(
+    ctx: &'c GpuContext,
+    batch: &mut Batch<'c>,
+    world: &World,
+    g: &GBuffer,
+    s: &RenderSettings,
+) -> Result<Option<Lease<'c>>, GpuError> {
     if !supported(world, s) {
         return Ok(None);
     }
-    let start = Instant::now();
     let n = g.len();
     let scene = ctx.scene(world)?;
     let tables = LightTables::new(world, s, n as u32);
@@ -230,7 +263,6 @@ pub fn render_direct(
         ctx.output("direct S, U (next)", 32 * n as u64)?,
     ];
     let radiance = ctx.output("direct radiance", 16 * n as u64)?;
-    let mut batch = Batch::new(ctx);
     let params = ctx.uniform("direct params", &tables.params);
     let pipeline = ctx.pipeline("direct", source);
     let mut resources = scene.bindings(&params, &gbuf);
@@ -247,7 +279,7 @@ pub fn render_direct(
         let filter = direct_filter(world.radius);
         record(
             ctx,
-            &mut batch,
+            batch,
             "direct_filter",
             &geometry,
             [&pair[0], &pair[1]],
@@ -277,18 +309,11 @@ pub fn render_direct(
         ],
     );
     batch.dispatch("direct_composite", &pipeline, &bind, n)?;
-    batch.read(radiance.buffer(), radiance.bytes())?;
-    let (reads, gpu) = batch.finish()?;
-    let out: &[Vec4] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
-    let radiance: Vec<Vec3> = out.iter().take(n).map(|v| v.truncate()).collect();
-    let mut timings = Timings::default();
-    for &(name, ms) in &gpu {
-        timings.push(name, ms);
+    let [a, b] = pair;
+    for lease in [table, lit, a, b] {
+        batch.keep(lease);
     }
-    let gpu_ms: f64 = gpu.iter().map(|(_, ms)| ms).sum();
-    let wall = start.elapsed().as_secs_f64() * 1e3;
-    timings.push("direct_transfer", (wall - gpu_ms).max(0.0));
-    Ok(Some(DirectOutput { radiance, timings }))
+    Ok(Some(radiance))
 }
 
 /// [`render_direct`] on the shared context, for the GPU methods' `IndirectMethod::direct`.

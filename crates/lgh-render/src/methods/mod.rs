@@ -225,6 +225,24 @@ pub trait IndirectMethod: Sync + Send {
     ) -> Result<Option<crate::passes::edge_aa::EdgeResolve>, RenderError> {
         Ok(None)
     }
+    /// Renders the frame's indirect light and, where `show.direct`, its direct light, and
+    /// shows the frame on this method's own backend without bringing its parts back: the
+    /// emission (where `show.emission`), direct and indirect light composed, `show.edges`
+    /// applied, added to the backend's running mean and tone-mapped as `show.request`
+    /// asks ([`crate::display`]). `Ok(None)`, the default: the recipe renders the frame
+    /// and the caller shows it on the CPU. lgh-gpu's `lgh` shows frames on the GPU; its
+    /// output then holds no images (`radiance` and the planes empty, no rays counted).
+    ///
+    /// # Errors
+    /// The method cannot render these inputs, or the backend failed.
+    fn render_shown(
+        &self,
+        _inputs: &MethodInputs,
+        _show: &crate::display::ShowInputs,
+        _memory: &mut FrameMemory,
+    ) -> Result<Option<(MethodOutput, crate::display::Displayed)>, RenderError> {
+        Ok(None)
+    }
     /// Traces the frame's primary rays into `g` (`world` seen by `camera` at `width` x
     /// `height`, every plane and [`GBuffer::view`] set as [`GBuffer::render_into`] sets
     /// them) on this method's own backend and returns `Ok(true)`, or returns `Ok(false)`,

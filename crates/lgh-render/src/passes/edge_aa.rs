@@ -198,6 +198,18 @@ impl EdgeResolve {
         self.edges.len()
     }
 
+    /// The image's width and height.
+    #[must_use]
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Sub-pixel samples per edge pixel.
+    #[must_use]
+    pub fn samples(&self) -> u32 {
+        self.samples
+    }
+
     /// Applies the resolve to a radiance image of the frame's size (`pixels`, row-major).
     pub fn apply(&self, pixels: &mut [Vec3]) {
         if self.edges.is_empty() || pixels.len() != self.width as usize * self.height as usize {

@@ -513,6 +513,33 @@ impl LghFrame {
         overdraw: Vec<u32>,
         timings: Timings,
     ) -> MethodOutput {
+        let stats = |stats: &mut LghStats| {
+            stats.avg_overdraw = inputs.gbuffer.mean_over_hits(&overdraw);
+            stats.shadow_rays = shadowed.rays;
+        };
+        let out = self.output(timings, stats);
+        MethodOutput {
+            radiance: shadowed.indirect,
+            unshadowed: Some(shadowed.unshadowed),
+            shadow_ratio: Some(shadowed.ratio),
+            lights_per_pixel: Some(overdraw),
+            shadow_rays: shadowed.rays,
+            ..out
+        }
+    }
+
+    /// The output of a frame shown where its images were computed (on the GPU:
+    /// `lgh_render::display`), which brings none of them back: its statistics, without the
+    /// lights per pixel and the rays, and the times of the steps after the preparation
+    /// (`lighting` gets the preparation's share added).
+    #[must_use]
+    pub fn finish_shown(self, timings: Timings) -> MethodOutput {
+        self.output(timings, |_| {})
+    }
+
+    /// The output without images: the statistics (`fill` adds what the images say) and
+    /// the times.
+    fn output(self, timings: Timings, fill: impl FnOnce(&mut LghStats)) -> MethodOutput {
         let Self {
             mut stats,
             timings: mut t,
@@ -527,16 +554,11 @@ impl LghFrame {
             };
             t.push(&name, ms);
         }
-        stats.avg_overdraw = inputs.gbuffer.mean_over_hits(&overdraw);
-        stats.shadow_rays = shadowed.rays;
+        fill(&mut stats);
         MethodOutput {
-            radiance: shadowed.indirect,
-            unshadowed: Some(shadowed.unshadowed),
-            shadow_ratio: Some(shadowed.ratio),
-            lights_per_pixel: Some(overdraw),
-            shadow_rays: shadowed.rays,
             timings: t,
             stats: Some(Arc::new(stats)),
+            ..MethodOutput::default()
         }
     }
 }

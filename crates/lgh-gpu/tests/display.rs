@@ -1,0 +1,202 @@
+//! Frames shown on the GPU (`lgh_gpu::display`, `lgh view --device gpu`) against the CPU's
+//! display of the same parts (`lgh_render::display::RunningMean`): the composition, the edge
+//! resolve, the running mean and the tone mapping. The GPU rounds floats on its own (fused
+//! multiply-adds, its `pow`), so the linear means agree to a relative 1e-5 and the packed
+//! pixels to one step of 8 bits in a channel.
+
+mod common;
+
+use glam::Vec3;
+use lgh_gpu::GpuContext;
+use lgh_render::display::{DisplayRequest, Displayed, RunningMean};
+use lgh_render::passes::edge_aa::EdgeResolve;
+use lgh_render::passes::gbuffer::GBuffer;
+use lgh_render::{Component, RenderSettings, Silent, render_frame_shown, render_frame_with};
+
+/// The largest difference of one 8-bit channel between two packed images, and the share of
+/// pixels that differ at all.
+fn packed_difference(a: &[u32], b: &[u32]) -> (u32, f64) {
+    assert_eq!(a.len(), b.len());
+    let mut worst = 0;
+    let mut differ = 0;
+    for (x, y) in a.iter().zip(b) {
+        let d = (0..3)
+            .map(|c| ((x >> (8 * c)) & 0xff).abs_diff((y >> (8 * c)) & 0xff))
+            .max()
+            .unwrap_or(0);
+        worst = worst.max(d);
+        differ += usize::from(d > 0);
+    }
+    (worst, differ as f64 / a.len().max(1) as f64)
+}
+
+/// The largest difference between two linear images relative to the larger value (and
+/// 1e-3 of the brightest pixel, below which a difference is rounding).
+fn relative_difference(a: &[Vec3], b: &[Vec3]) -> f32 {
+    assert_eq!(a.len(), b.len());
+    let top = a.iter().map(|p| p.max_element()).fold(0.0f32, f32::max);
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| {
+            let scale = x
+                .abs()
+                .max(y.abs())
+                .max_element()
+                .max(1e-3 * top)
+                .max(1e-30);
+            (*x - *y).abs().max_element() / scale
+        })
+        .fold(0.0, f32::max)
+}
+
+/// Checks a GPU display against the CPU's.
+fn assert_same(gpu: &Displayed, cpu: &Displayed, what: &str) {
+    assert_eq!(gpu.frames, cpu.frames, "{what}: frames in the mean");
+    let (worst, share) = packed_difference(&gpu.pixels, &cpu.pixels);
+    assert!(
+        worst <= 1 && share < 0.01,
+        "{what}: packed {worst}, {share}"
+    );
+    let (Some(g), Some(c)) = (&gpu.mean, &cpu.mean) else {
+        panic!("{what}: no linear mean");
+    };
+    let d = relative_difference(g, c);
+    assert!(d < 1e-5, "{what}: linear mean {d}");
+    assert!(c.iter().any(|p| p.max_element() > 0.0), "{what}: black");
+}
+
+/// Images of the parts: made-up radiance that varies from pixel to pixel and frame to
+/// frame, with an outlier and a non-finite value (the display shows them as the CPU does).
+fn part(n: usize, seed: u32, scale: f32) -> Vec<Vec3> {
+    (0..n)
+        .map(|i| {
+            let h = lgh_core::rng::hash(&[i as u64, u64::from(seed)]);
+            let f = |k: u32| ((h >> k) & 0xff) as f32 / 255.0;
+            match i {
+                5 => Vec3::splat(1e6),
+                9 if seed == 1 => Vec3::new(f32::NAN, 0.5, f32::INFINITY),
+                _ => Vec3::new(f(0), f(8), f(16)) * scale,
+            }
+        })
+        .collect()
+}
+
+/// The emission, direct and indirect parts composed, their edges resolved, accumulated
+/// over three frames (the first restarting the mean) and tone-mapped on the GPU, as the
+/// CPU composes, resolves and shows them; a restart starts again; without the linear
+/// mean, the pixels alone come back.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn parts_shown_on_the_gpu_are_the_cpus_display() {
+    let ctx = GpuContext::shared().expect("an adapter");
+    let world = common::world(None);
+    let (w, h) = (61, 37);
+    let camera = world.scene.camera().frame(w, h);
+    let mut g = GBuffer::default();
+    g.render_into(&world, &camera, w, h);
+    let n = g.len();
+    assert!(
+        g.emission.iter().any(|e| *e != Vec3::ZERO),
+        "no emitter seen"
+    );
+    let edges = EdgeResolve::new(&world, &camera, &g, 4, None);
+    assert!(edges.edge_pixels() > 0);
+    let mut cpu = RunningMean::default();
+    for (frame, restart) in [(0u32, true), (1, false), (2, false), (3, true)] {
+        let direct = part(n, 2 * frame + 1, 2.0);
+        let indirect = part(n, 2 * frame + 2, 0.5);
+        let request = DisplayRequest {
+            exposure: 1.5,
+            restart,
+            linear: true,
+        };
+        let parts = (true, &direct[..], &indirect[..]);
+        let gpu =
+            lgh_gpu::display::show_parts(ctx, &g, parts, Some(&edges), &request).expect("shown");
+        let mut image: Vec<Vec3> = (0..n)
+            .map(|p| g.emission[p] + direct[p] + indirect[p])
+            .collect();
+        edges.apply(&mut image);
+        let image = lgh_render::Image::from_pixels(w, h, image).pixels;
+        let want = cpu.show(image, &request);
+        assert_same(&gpu, &want, &format!("frame {frame}"));
+    }
+    // The indirect part alone, without the mean: the pixels only.
+    let indirect = part(n, 99, 1.0);
+    let request = DisplayRequest {
+        exposure: 1.0,
+        restart: true,
+        linear: false,
+    };
+    let gpu = lgh_gpu::display::show_parts(ctx, &g, (false, &[], &indirect), None, &request)
+        .expect("shown");
+    assert!(gpu.mean.is_none());
+    let want = RunningMean::default().show(indirect, &request);
+    let (worst, share) = packed_difference(&gpu.pixels, &want.pixels);
+    assert!(
+        worst <= 1 && share < 0.01,
+        "indirect alone: {worst}, {share}"
+    );
+}
+
+/// A change of the settings.
+type Change = fn(&mut RenderSettings);
+
+/// `render_frame_shown` with the GPU's lgh (the viewer's `--device gpu`) shows on the GPU
+/// the frame `render_frame_with` brings back and the CPU shows: at the viewer's settings
+/// with the edge resolve, over two accumulated frames, for the indirect component alone,
+/// and with one level shown alone (its grids read back to the CPU).
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn gpu_frames_shown_on_the_gpu_are_the_frames_brought_back() {
+    for scene in [None, Some("test/two-rooms.toml")] {
+        let world = common::world(scene);
+        let mut s = RenderSettings {
+            width: 64,
+            height: 36,
+            vpls: 3000,
+            method: lgh_gpu::lgh::LGH_GPU,
+            edge_samples: 4,
+            ..RenderSettings::default()
+        };
+        s.tiling.interleave = Some(4);
+        s.shadows.samples = Some(4);
+        let cases: [(&str, Change); 3] = [
+            ("viewer", |_| {}),
+            ("indirect", |s| s.component = Component::Indirect),
+            ("one level", |s| s.lgh.only_level = Some(2)),
+        ];
+        for (what, change) in cases {
+            let mut s = s.clone();
+            change(&mut s);
+            let what = format!("{scene:?}, {what}");
+            let mut cpu = RunningMean::default();
+            let mut memory = lgh_render::FrameMemory::default();
+            for (seed, restart) in [(3, true), (4, false)] {
+                s.seed = seed;
+                let request = DisplayRequest {
+                    exposure: world.scene.exposure,
+                    restart,
+                    linear: true,
+                };
+                let mut shown =
+                    render_frame_shown(&world, &s, &Silent, &mut memory, request).expect("shown");
+                let gpu = shown.shown.take().expect("shown on the GPU");
+                assert!(shown.image.pixels.is_empty());
+                assert_eq!((shown.image.width, shown.image.height), (64, 36));
+                memory.recycle_gbuffer(shown.gbuffer);
+                let back = render_frame_with(&world, &s, &Silent, &mut memory).expect("frame");
+                assert!(back.shown.is_none());
+                let want = cpu.show(back.image.pixels, &request);
+                assert_same(&gpu, &want, &format!("{what}, seed {seed}"));
+                memory.recycle_gbuffer(back.gbuffer);
+            }
+        }
+    }
+}
