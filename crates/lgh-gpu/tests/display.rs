@@ -112,6 +112,7 @@ fn parts_shown_on_the_gpu_are_the_cpus_display() {
             exposure: 1.5,
             restart,
             linear: true,
+            taa: None,
         };
         let parts = (true, &direct[..], &indirect[..]);
         let gpu =
@@ -130,6 +131,7 @@ fn parts_shown_on_the_gpu_are_the_cpus_display() {
         exposure: 1.0,
         restart: true,
         linear: false,
+        taa: None,
     };
     let gpu = lgh_gpu::display::show_parts(ctx, &g, (false, &[], &indirect), None, &request)
         .expect("shown");
@@ -184,6 +186,7 @@ fn gpu_frames_shown_on_the_gpu_are_the_frames_brought_back() {
                     exposure: world.scene.exposure,
                     restart,
                     linear: true,
+                    taa: None,
                 };
                 let mut shown =
                     render_frame_shown(&world, &s, &Silent, &mut memory, request).expect("shown");
@@ -198,5 +201,93 @@ fn gpu_frames_shown_on_the_gpu_are_the_frames_brought_back() {
                 memory.recycle_gbuffer(back.gbuffer);
             }
         }
+    }
+}
+
+/// A sequence's moving frames with the temporal filter of the shadow ratio
+/// (`Sequence::render_shown`, the viewer's `--taa` with `--device gpu`) filtered and shown
+/// on the GPU are the frames brought back and filtered by the CPU's `TemporalFilter`: the
+/// camera turns a little every frame, so the history is reprojected. Reprojection picks a
+/// pixel by truncating a projected coordinate, which the GPU's rounding moves across a
+/// pixel's edge now and then: all but a few pixels in a thousand agree to a relative 1e-4
+/// (on lavapipe, all of them).
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn the_temporal_filter_on_the_gpu_is_the_cpus() {
+    use lgh_render::denoise::temporal::TemporalSettings;
+    use lgh_render::sequence::Sequence;
+    for scene in [None, Some("test/clutter.toml")] {
+        let mut world = common::world(scene);
+        let mut s = RenderSettings {
+            width: 64,
+            height: 36,
+            vpls: 3000,
+            method: lgh_gpu::lgh::LGH_GPU,
+            edge_samples: 4,
+            ..RenderSettings::default()
+        };
+        s.tiling.interleave = Some(4);
+        s.shadows.samples = Some(4);
+        let rest = world.scene.camera();
+        let lights = world.scene.lights.clone();
+        let taa = Some(TemporalSettings::default());
+        let (mut cpu, mut gpu) = (Sequence::new(taa), Sequence::new(taa));
+        let mut changed = 0.0;
+        for frame in 0..4u32 {
+            let mut camera = rest.clone();
+            let turn = glam::Quat::from_rotation_y(0.01 * frame as f32);
+            camera.look_at = camera.position + turn * (camera.look_at - camera.position);
+            world.set_view(camera, lights.clone());
+            s.seed = 10 + u64::from(frame);
+            let request = DisplayRequest {
+                exposure: world.scene.exposure,
+                restart: true,
+                linear: true,
+                taa: None,
+            };
+            let mut shown = gpu
+                .render_shown(&world, &s, &Silent, request)
+                .expect("shown");
+            let got = shown.shown.take().expect("shown on the GPU");
+            gpu.recycle(shown);
+            let back = cpu.render(&world, &s, &Silent).expect("frame");
+            let plain = render_frame_with(&world, &s, &Silent, &mut Default::default())
+                .expect("frame")
+                .image
+                .pixels;
+            let want = RunningMean::default().show(back.image.pixels.clone(), &request);
+            cpu.recycle(back);
+            let (g, c) = (got.mean.expect("mean"), want.mean.expect("mean"));
+            let top = c.iter().map(|p| p.max_element()).fold(0.0f32, f32::max);
+            let far = |a: &[Vec3], b: &[Vec3], tol: f32| {
+                let n = a
+                    .iter()
+                    .zip(b)
+                    .filter(|(x, y)| {
+                        let scale = x.abs().max(y.abs()).max_element().max(1e-3 * top);
+                        (**x - **y).abs().max_element() > tol * scale
+                    })
+                    .count();
+                n as f64 / a.len() as f64
+            };
+            let share = far(&g, &c, 1e-4);
+            assert!(
+                share < 0.003,
+                "{scene:?}, frame {frame}: {share} of the pixels differ"
+            );
+            let (worst, differ) = packed_difference(&got.pixels, &want.pixels);
+            assert!(
+                differ < 0.02,
+                "{scene:?}, frame {frame}: packed {worst}, {differ}"
+            );
+            if frame > 0 {
+                // The filter did something: the frame is not the unfiltered one.
+                changed += far(&c, &plain, 1e-3);
+            }
+        }
+        assert!(changed > 0.1, "{scene:?}: the filter changed {changed}");
     }
 }

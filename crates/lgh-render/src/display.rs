@@ -13,6 +13,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use crate::denoise::temporal::TemporalSettings;
 use crate::image::tonemap::tonemap_pixel;
 use crate::passes::edge_aa::EdgeResolve;
 
@@ -26,6 +27,20 @@ pub struct DisplayRequest {
     pub restart: bool,
     /// Also brings back the linear mean (for a screenshot), not only the packed pixels.
     pub linear: bool,
+    /// The temporal filter of the shadow ratio, for a sequence's moving frames
+    /// ([`crate::sequence::Sequence::render_shown`]); `None` for none.
+    pub taa: Option<TaaRequest>,
+}
+
+/// The temporal filter asked of a shown frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TaaRequest {
+    /// Its settings (a backend runs the target
+    /// [`crate::denoise::temporal::TemporalTarget::ShadowRatio`] only).
+    pub settings: TemporalSettings,
+    /// The history kept where the frame is shown is not this sequence's (the last frame
+    /// was filtered elsewhere): start again.
+    pub restart: bool,
 }
 
 /// A shown frame: the running mean, tone-mapped.
@@ -121,6 +136,7 @@ mod tests {
             exposure: 1.0,
             restart,
             linear: false,
+            taa: None,
         };
         let a = m.show(vec![Vec3::splat(1.0); 4], &r(false));
         assert_eq!(a.frames, 1);

@@ -80,6 +80,16 @@ impl<T> ViewCache<T> {
         key.is_some() && key == self.key && self.value.is_some()
     }
 
+    /// The kept value, if it is the one for `g` with `params`.
+    #[must_use]
+    pub fn kept(&self, g: &GBuffer, params: [u32; 4]) -> Option<&T> {
+        if self.holds(g, params) {
+            self.value.as_ref()
+        } else {
+            None
+        }
+    }
+
     /// Keeps `value` as the one for `g` with `params`.
     pub fn insert(&mut self, g: &GBuffer, params: [u32; 4], value: T) {
         self.key = g.view.map(|(id, frame)| (id, frame, params));

@@ -6,7 +6,8 @@
 use glam::Vec3;
 
 use crate::denoise::temporal::{TemporalFilter, TemporalSettings, TemporalTarget};
-use crate::frame::{Frame, render_frame_with};
+use crate::display::{DisplayRequest, TaaRequest};
+use crate::frame::{Frame, render_frame_shown, render_frame_with};
 use crate::memory::FrameMemory;
 use crate::progress::Progress;
 use crate::settings::{RenderError, RenderSettings};
@@ -19,6 +20,9 @@ pub struct Sequence {
     filter: TemporalFilter,
     /// Working memory reused from frame to frame.
     memory: FrameMemory,
+    /// The last frame was filtered where it was shown ([`Sequence::render_shown`]), so the
+    /// CPU's history is not its.
+    filtered_there: bool,
     /// The temporal filter, or `None` for independent frames.
     pub taa: Option<TemporalSettings>,
 }
@@ -28,9 +32,8 @@ impl Sequence {
     #[must_use]
     pub fn new(taa: Option<TemporalSettings>) -> Self {
         Self {
-            filter: TemporalFilter::default(),
-            memory: FrameMemory::default(),
             taa,
+            ..Self::default()
         }
     }
 
@@ -45,16 +48,63 @@ impl Sequence {
         settings: &RenderSettings,
         progress: &dyn Progress,
     ) -> Result<Frame, RenderError> {
-        let mut f = render_frame_with(world, settings, progress, &mut self.memory)?;
-        let Some(taa) = self.taa else {
+        let f = render_frame_with(world, settings, progress, &mut self.memory)?;
+        Ok(self.filter(f, settings))
+    }
+
+    /// [`Sequence::render`] for a viewer that shows the frame as `request` asks
+    /// ([`render_frame_shown`]): where the method's backend shows it, the backend also runs
+    /// the temporal filter of the shadow ratio, with a history of its own; else the frame
+    /// comes back, is filtered here and `Frame::shown` is `None`. (Each side's history
+    /// starts again where the last frame was filtered on the other.)
+    ///
+    /// # Errors
+    /// As [`crate::frame::render_frame`].
+    pub fn render_shown(
+        &mut self,
+        world: &World,
+        settings: &RenderSettings,
+        progress: &dyn Progress,
+        request: DisplayRequest,
+    ) -> Result<Frame, RenderError> {
+        let taa = self.taa.map(|settings| TaaRequest {
+            settings,
+            restart: !self.filtered_there,
+        });
+        let request = DisplayRequest { taa, ..request };
+        let f = render_frame_shown(world, settings, progress, &mut self.memory, request)?;
+        if f.shown.is_some() {
+            self.filtered_there = true;
             return Ok(f);
+        }
+        Ok(self.filter(f, settings))
+    }
+
+    /// Filters the frame `f` rendered with `settings` on the CPU (where the temporal
+    /// filter is on): its indirect light recomposed from the filtered value, with its
+    /// edges resolved again where the recipe resolved them.
+    fn filter(&mut self, mut f: Frame, settings: &RenderSettings) -> Frame {
+        let Some(taa) = self.taa else {
+            return f;
         };
+        if std::mem::take(&mut self.filtered_there) {
+            self.filter = TemporalFilter::default();
+        }
         let start = std::time::Instant::now();
         let indirect = match (taa.target, &f.method.unshadowed, &f.method.shadow_ratio) {
             (TemporalTarget::ShadowRatio, Some(a), Some(ratio)) => {
                 let r = &ratio.filtered;
                 let ratio = self.filter.apply(f.camera, &f.gbuffer, r, &ratio.raw, &taa);
-                composite(&f.gbuffer, a, &ratio)
+                let mut indirect = composite(&f.gbuffer, a, &ratio);
+                // The recipe resolved the edges of the indirect light it composed.
+                let edges = [settings.edge_samples, 0, 0, 0];
+                if settings.edge_samples > 1
+                    && settings.region.is_none()
+                    && let Some(r) = self.memory.edge_resolve.kept(&f.gbuffer, edges)
+                {
+                    r.apply(&mut indirect);
+                }
+                indirect
             }
             (TemporalTarget::Indirect, Some(a), Some(ratio)) => {
                 let raw = composite(&f.gbuffer, a, &ratio.raw);
@@ -69,7 +119,7 @@ impl Sequence {
         f.set_indirect(indirect, settings.component);
         f.timings
             .push("temporal", start.elapsed().as_secs_f64() * 1e3);
-        Ok(f)
+        f
     }
 }
 

@@ -171,23 +171,26 @@ impl FrameLoop {
         if let Some(m) = self.backend.and_then(|map| map(&settings)) {
             (settings.method, device) = (m, "gpu");
         }
-        // A GPU frame is shown where it was made (only its packed pixels come back), as
-        // long as the view shows the frame itself (not the heat map, not a sequence
-        // through the CPU's temporal filter); its running mean restarts where the last
+        // A GPU frame is shown where it was made (only its packed pixels come back; moving
+        // frames with the temporal filter run it there too), as long as the view shows the
+        // frame itself (not the heat map); its running mean restarts where the last
         // frame's was on the CPU.
-        let request =
-            (device == "gpu" && !state.heatmap && (still || !state.taa)).then(|| DisplayRequest {
-                exposure: self.exposure,
-                restart: self.accumulated == 0 || self.mean_at != MeanAt::Gpu,
-                linear: self.linear,
-            });
-        let mut frame = if let Some(request) = request {
-            render_frame_shown(&self.world, &settings, &Silent, &mut self.memory, request)?
-        } else if still || !state.taa {
-            render_frame_with(&self.world, &settings, &Silent, &mut self.memory)?
-        } else {
+        let request = (device == "gpu" && !state.heatmap).then(|| DisplayRequest {
+            exposure: self.exposure,
+            restart: self.accumulated == 0 || self.mean_at != MeanAt::Gpu,
+            linear: self.linear,
+            taa: None,
+        });
+        let sequence = !still && state.taa;
+        if sequence {
             self.sequence.taa = Some(Default::default());
-            self.sequence.render(&self.world, &settings, &Silent)?
+        }
+        let (world, memory) = (&self.world, &mut self.memory);
+        let mut frame = match (request, sequence) {
+            (Some(r), false) => render_frame_shown(world, &settings, &Silent, memory, r)?,
+            (Some(r), true) => self.sequence.render_shown(world, &settings, &Silent, r)?,
+            (None, false) => render_frame_with(world, &settings, &Silent, memory)?,
+            (None, true) => self.sequence.render(world, &settings, &Silent)?,
         };
         self.shown_version = Some(state.version);
         let display_start = Instant::now();
@@ -219,6 +222,7 @@ impl FrameLoop {
                 exposure,
                 restart: self.accumulated == 0 || self.mean_at != MeanAt::Cpu,
                 linear: true,
+                taa: None,
             };
             let shown = self
                 .mean
@@ -250,7 +254,7 @@ impl FrameLoop {
             ms: start.elapsed().as_secs_f64() * 1e3,
             device,
         };
-        if still || !state.taa {
+        if !sequence {
             self.memory.recycle_gbuffer(frame.gbuffer);
         } else {
             self.sequence.recycle(frame);

@@ -16,7 +16,7 @@ use std::thread::ThreadId;
 
 use glam::{Vec3, Vec4};
 use lgh_render::display::{DisplayRequest, Displayed, ShowInputs};
-use lgh_render::methods::MethodInputs;
+use lgh_render::methods::{MethodInputs, MethodOutput};
 use lgh_render::passes::edge_aa::EdgeResolve;
 use lgh_render::passes::gbuffer::GBuffer;
 
@@ -24,6 +24,8 @@ use crate::batch::{Batch, PassTimes, Words};
 use crate::context::{GpuContext, GpuError};
 use crate::gbuffer::GpuGBuffer;
 use crate::pool::Lease;
+
+pub(crate) mod taa;
 
 /// One part of a shown frame's image.
 #[derive(Clone, Copy)]
@@ -90,6 +92,8 @@ type ShownEmission = (Arc<GpuGBuffer>, Option<Arc<wgpu::Buffer>>);
 #[derive(Debug, Default)]
 pub(crate) struct DisplayStates {
     sums: Mutex<HashMap<ThreadId, Sum>>,
+    /// Each thread's history of the temporal filter.
+    pub(crate) histories: taa::Histories,
     emission: Mutex<Option<ShownEmission>>,
 }
 
@@ -379,7 +383,8 @@ pub(crate) struct Shown<'a> {
 
 /// Records the direct light of the frame of `inputs` (on the GPU, or `shown.host_direct`)
 /// where it is asked for, and the frame's showing with the indirect light `indirect`, into
-/// `batch`.
+/// `batch`; where the ratio estimator's result is that light and the request asks for it,
+/// its temporal filter first ([`taa`]).
 ///
 /// # Errors
 /// As [`record`].
@@ -392,6 +397,9 @@ pub(crate) fn record_frame<'c>(
     indirect: Part<'_, 'c>,
 ) -> Result<Recorded, GpuError> {
     let (world, g, s) = (inputs.world, inputs.gbuffer, inputs.settings);
+    if let (Some(taa), Part::Ratio(result)) = (&shown.inputs.request.taa, indirect) {
+        taa::record(ctx, batch, (g, gbuffer), inputs.camera, result, taa)?;
+    }
     let on_gpu = shown.inputs.direct && shown.host_direct.is_none();
     let lease = if on_gpu {
         crate::direct::record_direct(ctx, batch, world, g, s)?
@@ -416,8 +424,10 @@ pub(crate) fn record_frame<'c>(
     Ok(recorded)
 }
 
-/// Shows the frame of `inputs` whose indirect light the CPU holds (`indirect`), in a
-/// submission of its own: the shown frame and the GPU's pass times.
+/// Shows the frame of `inputs` whose indirect light came back to the CPU (`out`), in a
+/// submission of its own: the shown frame and the GPU's pass times. Where the request asks
+/// for the temporal filter and `out` holds A and the ratios, they are uploaded as the
+/// ratio estimator's result (the filter's input) instead of the radiance.
 ///
 /// # Errors
 /// As [`record`], or the GPU failed.
@@ -425,14 +435,32 @@ pub(crate) fn show_frame(
     ctx: &GpuContext,
     inputs: &MethodInputs,
     shown: &Shown<'_>,
-    indirect: &[Vec3],
+    out: &MethodOutput,
 ) -> Result<(Displayed, PassTimes), GpuError> {
-    let gbuffer = ctx.gbuffer(inputs.gbuffer)?;
+    let g = inputs.gbuffer;
+    let gbuffer = ctx.gbuffer(g)?;
     let mut batch = Batch::new(ctx);
-    let part = if indirect.len() == inputs.gbuffer.len() {
-        Part::Host(indirect)
-    } else {
-        Part::Zero
+    let n = g.len();
+    let planes = match (
+        &shown.inputs.request.taa,
+        &out.unshadowed,
+        &out.shadow_ratio,
+    ) {
+        (Some(_), Some(a), Some(r)) if a.len() == n => {
+            let rows: Vec<[Vec4; 3]> = (0..n)
+                .map(|p| {
+                    let at = |v: &[Vec3]| v.get(p).copied().unwrap_or(Vec3::ONE).extend(0.0);
+                    [a[p].extend(0.0), at(&r.raw), at(&r.filtered)]
+                })
+                .collect();
+            Some(ctx.upload("ratio result", &rows)?)
+        }
+        _ => None,
+    };
+    let part = match (&planes, out.radiance.len() == n) {
+        (Some(p), _) => Part::Ratio(p),
+        (None, true) => Part::Host(&out.radiance),
+        (None, false) => Part::Zero,
     };
     let recorded = record_frame(ctx, &mut batch, inputs, shown, &gbuffer, part)?;
     let (reads, times) = batch.finish()?;

@@ -51,6 +51,7 @@ use crate::display::Shown;
 use crate::gbuffer::GpuGBuffer;
 use crate::pool::Lease;
 use chain::Shaded;
+use lgh_render::denoise::temporal::TemporalTarget;
 use lgh_render::direct::render_direct;
 use lgh_render::display::{Displayed, ShowInputs};
 
@@ -108,6 +109,12 @@ impl IndirectMethod for GpuLgh {
         memory: &mut FrameMemory,
     ) -> Result<Option<(MethodOutput, Displayed)>, RenderError> {
         let (world, g, s) = (inputs.world, inputs.gbuffer, inputs.settings);
+        // The GPU's temporal filter runs on the shadow ratio alone.
+        let k = s.shadows.k(self.cpu == LGH, DEFAULT_SHADOW_SAMPLES);
+        let target = show.request.taa.map(|t| t.settings.target);
+        if target.is_some_and(|t| k == 0 || t != TemporalTarget::ShadowRatio) {
+            return Ok(None);
+        }
         // The direct light where the GPU's pass does not run the scene, on the CPU.
         let host_direct = (show.direct && !crate::direct::supported(world, s)).then(|| {
             let (seed, samples, mode) = (s.seed, s.area_samples, s.direct);
@@ -126,9 +133,11 @@ impl IndirectMethod for GpuLgh {
         // shown in a submission of its own.
         let fail = |e: GpuError| RenderError::Backend(e.to_string());
         let ctx = GpuContext::shared().map_err(fail)?;
-        let radiance = std::mem::take(&mut out.radiance);
         let (displayed, gpu) =
-            crate::display::show_frame(ctx, inputs, &shown, &radiance).map_err(fail)?;
+            crate::display::show_frame(ctx, inputs, &shown, &out).map_err(fail)?;
+        // A shown frame's output holds no images.
+        (out.radiance, out.unshadowed, out.shadow_ratio) = (Vec::new(), None, None);
+        out.lights_per_pixel = None;
         for (name, ms) in gpu {
             out.timings.push(name, ms);
         }

@@ -24,3 +24,19 @@ fn camera_direction(c: Camera, px: vec2<f32>) -> vec3<f32> {
     let v = c.forward + c.right * (ndc.x * c.scale.x) + c.up * (ndc.y * c.scale.y);
     return v * (1.0 / sqrt(dot(v, v)));
 }
+
+// The image point (pixels) of the world point `p` and its depth along the viewing direction
+// (lgh-scene's CameraFrame::project); w is 0 behind the camera (the point is then not
+// seen), else 1.
+fn camera_project(c: Camera, p: vec3<f32>) -> vec4<f32> {
+    let d = p - c.origin;
+    let z = dot(d, c.forward);
+    if (z <= 0.0) {
+        return vec4<f32>(0.0);
+    }
+    let x = dot(d, c.right) / (z * c.scale.x);
+    let y = dot(d, c.up) / (z * c.scale.y);
+    let px = vec2<f32>((x + 1.0) * 0.5 * c.size.x, (1.0 - y) * 0.5 * c.size.y)
+        - vec2<f32>(c.jitter_x, c.jitter_y);
+    return vec4<f32>(px, z, 1.0);
+}
