@@ -84,6 +84,13 @@ for i in "${!scenes[@]}"; do
         --shadow-samples 4 --light-speed 2 --keys "$keys" --device gpu --frames "$frames" \
         --stats "$tmp/$name-gpu.json"
     cases+=("{\"scene\": \"${names[$i]}\", \"vpls\": $n, \"camera\": \"moving\", \"view\": $(cat "$tmp/$name-gpu.json"), \"view_cpu\": null}")
+    # The same with the temporal filter of the shadow ratio (on the GPU, in the frame's
+    # submission).
+    name="${names[$i]}-$n-moving-taa"
+    step "$name-gpu" "$lgh" view "${scenes[$i]}" --headless --size "$size" --vpls "$n" \
+        --shadow-samples 4 --light-speed 2 --keys "$keys" --taa --device gpu --frames "$frames" \
+        --stats "$tmp/$name-gpu.json"
+    cases+=("{\"scene\": \"${names[$i]}\", \"vpls\": $n, \"camera\": \"moving, taa\", \"view\": $(cat "$tmp/$name-gpu.json"), \"view_cpu\": null}")
     # One hierarchy per normal bin (the render's default), the VPLs split on the GPU.
     name="${names[$i]}-$n-bins"
     step "$name-gpu" "$lgh" view "${scenes[$i]}" --headless --size "$size" --vpls "$n" \
