@@ -55,6 +55,19 @@ pub struct GpuGBuffer {
     planes: (u32, u32, [Vec<u8>; 6]),
     /// The view of the G-buffer it was packed from.
     view: Option<(u64, CameraFrame)>,
+    /// Its emission where the GPU traced it ([`crate::primary`]).
+    emission: GpuEmission,
+}
+
+/// The emission of a G-buffer on the GPU.
+#[derive(Debug)]
+pub(crate) enum GpuEmission {
+    /// Not on the GPU (the G-buffer was uploaded): its planes hold it.
+    OnCpu,
+    /// Zero everywhere.
+    Zero,
+    /// One vec4 a pixel.
+    Kept(wgpu::Buffer),
 }
 
 impl GpuGBuffer {
@@ -68,6 +81,11 @@ impl GpuGBuffer {
     #[must_use]
     pub fn buffer(&self) -> &wgpu::Buffer {
         &self.buffer
+    }
+
+    /// Its emission, where the GPU traced it.
+    pub(crate) fn emission(&self) -> &GpuEmission {
+        &self.emission
     }
 
     /// True if it was packed from exactly the planes of `g`: the same known view, or the
@@ -137,6 +155,7 @@ impl GpuContext {
             buffer,
             planes: (w, h, planes),
             view: g.view,
+            emission: GpuEmission::OnCpu,
         });
         *cache.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::clone(&up));
         Ok(up)
@@ -165,14 +184,15 @@ impl GpuContext {
     }
 
     /// Makes `buffer`, packed on the GPU for the G-buffer `g` (whose view is known:
-    /// [`crate::primary`]), the last uploaded G-buffer, so that the frame's passes read it
+    /// [`crate::primary`]), with its `emission`, the last uploaded G-buffer, so that the frame's passes read it
     /// where it is. No copy of its planes is kept: a G-buffer whose view is unknown is never
     /// taken for it.
-    pub(crate) fn adopt_gbuffer(&self, buffer: wgpu::Buffer, g: &GBuffer) {
+    pub(crate) fn adopt_gbuffer(&self, buffer: wgpu::Buffer, g: &GBuffer, emission: GpuEmission) {
         let up = Arc::new(GpuGBuffer {
             buffer,
             planes: (g.width, g.height, Default::default()),
             view: g.view,
+            emission,
         });
         *self
             .gbuffers()

@@ -112,6 +112,11 @@ impl Detached {
     pub(crate) fn buffer(&self) -> &wgpu::Buffer {
         &self.buffer
     }
+
+    /// The buffer, no longer a pool's.
+    pub(crate) fn into_buffer(self) -> wgpu::Buffer {
+        self.buffer
+    }
 }
 
 impl GpuContext {

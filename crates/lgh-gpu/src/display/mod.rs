@@ -22,7 +22,7 @@ use lgh_render::passes::gbuffer::GBuffer;
 
 use crate::batch::{Batch, PassTimes, Words};
 use crate::context::{GpuContext, GpuError};
-use crate::gbuffer::GpuGBuffer;
+use crate::gbuffer::{GpuEmission, GpuGBuffer};
 use crate::pool::Lease;
 
 pub(crate) mod taa;
@@ -218,8 +218,9 @@ pub(crate) fn record<'c>(
         params.as_entire_binding(),
         gbuffer.binding(),
         emission
-            .as_deref()
-            .map_or(stand_in.binding(), wgpu::Buffer::as_entire_binding),
+            .as_ref()
+            .and_then(EmissionBuffer::binding)
+            .unwrap_or_else(|| stand_in.binding()),
     ];
     resources.extend(bindings);
     resources.push(image.binding());
@@ -318,13 +319,18 @@ fn record_edges<'c>(
     Ok(())
 }
 
-/// The emission of `g` on the GPU (`None` where it is zero everywhere), uploaded once per
-/// G-buffer on the GPU.
+/// The emission of `g` on the GPU (`None` where it is zero everywhere): the primary rays'
+/// where the GPU traced them, else uploaded once per G-buffer on the GPU.
 fn emission_of(
     ctx: &GpuContext,
     g: &GBuffer,
     gbuffer: &Arc<GpuGBuffer>,
-) -> Result<Option<Arc<wgpu::Buffer>>, GpuError> {
+) -> Result<Option<EmissionBuffer>, GpuError> {
+    match gbuffer.emission() {
+        GpuEmission::Zero => return Ok(None),
+        GpuEmission::Kept(_) => return Ok(Some(EmissionBuffer::Traced(Arc::clone(gbuffer)))),
+        GpuEmission::OnCpu => {}
+    }
     let states = ctx.display_states();
     let mut last = states
         .emission
@@ -333,7 +339,7 @@ fn emission_of(
     if let Some((at, buffer)) = last.as_ref()
         && Arc::ptr_eq(at, gbuffer)
     {
-        return Ok(buffer.clone());
+        return Ok(buffer.clone().map(EmissionBuffer::Uploaded));
     }
     let buffer = if g.emission.iter().any(|e| *e != Vec3::ZERO) {
         let rows: Vec<Vec4> = g.emission.iter().map(|e| e.extend(0.0)).collect();
@@ -342,7 +348,27 @@ fn emission_of(
         None
     };
     *last = Some((Arc::clone(gbuffer), buffer.clone()));
-    Ok(buffer)
+    Ok(buffer.map(EmissionBuffer::Uploaded))
+}
+
+/// A G-buffer's emission on the GPU.
+enum EmissionBuffer {
+    /// Traced with the G-buffer (held by it).
+    Traced(Arc<GpuGBuffer>),
+    /// Uploaded from its planes.
+    Uploaded(Arc<wgpu::Buffer>),
+}
+
+impl EmissionBuffer {
+    fn binding(&self) -> Option<wgpu::BindingResource<'_>> {
+        match self {
+            Self::Traced(g) => match g.emission() {
+                GpuEmission::Kept(b) => Some(b.as_entire_binding()),
+                _ => None,
+            },
+            Self::Uploaded(b) => Some(b.as_entire_binding()),
+        }
+    }
 }
 
 /// This thread's running sum for a frame of `pixels` pixels: the buffer, whether this frame

@@ -15,6 +15,7 @@ use lgh_scene::camera::CameraFrame;
 
 use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
+use crate::gbuffer::GpuEmission;
 use crate::pool::Lease;
 
 /// `Camera` of `shaders/camera.wgsl`: what `CameraFrame::direction` computes from.
@@ -105,7 +106,14 @@ pub fn trace_gbuffer(
     crate::gbuffer::unpack(g, &pixels[..n], &emitted[..n]);
     (g.width, g.height) = (width, height);
     g.view = Some((world.geometry_id(), *camera));
-    ctx.adopt_gbuffer(packed, g);
+    // The emission stays on the GPU for a frame shown there (`crate::display`).
+    let seen = g.emission.iter().any(|e| *e != glam::Vec3::ZERO);
+    let emission = if seen {
+        GpuEmission::Kept(emission.detach().into_buffer())
+    } else {
+        GpuEmission::Zero
+    };
+    ctx.adopt_gbuffer(packed, g, emission);
     Ok(())
 }
 
