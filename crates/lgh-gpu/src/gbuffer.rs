@@ -184,9 +184,9 @@ impl GpuContext {
     }
 
     /// Makes `buffer`, packed on the GPU for the G-buffer `g` (whose view is known:
-    /// [`crate::primary`]), with its `emission`, the last uploaded G-buffer, so that the frame's passes read it
-    /// where it is. No copy of its planes is kept: a G-buffer whose view is unknown is never
-    /// taken for it.
+    /// [`crate::primary`]), with its `emission`, the last uploaded G-buffer, so that the
+    /// frame's passes read it where it is. No copy of its planes is kept: a G-buffer whose
+    /// view is unknown is never taken for it.
     pub(crate) fn adopt_gbuffer(&self, buffer: wgpu::Buffer, g: &GBuffer, emission: GpuEmission) {
         let up = Arc::new(GpuGBuffer {
             buffer,

@@ -135,12 +135,13 @@ pub fn render_frame_with(
 }
 
 /// [`render_frame_with`] for a viewer that shows the frame as `request` asks: where the
-/// method's backend shows frames itself ([`crate::methods::IndirectMethod::render_shown`]: lgh-gpu's
-/// `lgh`, for the components [`Component::All`] and [`Component::Indirect`]), the frame
-/// is composed, added to that backend's running mean and tone-mapped there, and comes back
-/// as [`Frame::shown`] with its images empty (their sizes kept): only the packed pixels
-/// cross from the device. Else the frame is rendered as [`render_frame_with`] renders it,
-/// `shown` is `None`, and the caller shows it ([`crate::display::RunningMean`]).
+/// method's backend shows frames itself
+/// ([`crate::methods::IndirectMethod::render_shown`]: lgh-gpu's `lgh`, for the components
+/// [`Component::All`] and [`Component::Indirect`]), the frame is composed, added to that
+/// backend's running mean and tone-mapped there, and comes back as [`Frame::shown`] with
+/// its images empty (their sizes kept): only the packed pixels cross from the device. Else
+/// the frame is rendered as [`render_frame_with`] renders it, `shown` is `None`, and the
+/// caller shows it ([`crate::display::RunningMean`]).
 ///
 /// # Errors
 /// As [`render_frame`].
@@ -325,9 +326,9 @@ fn find_edges<'m>(
 }
 
 /// The frame's direct and indirect light rendered and shown by the method's backend
-/// ([`crate::methods::IndirectMethod::render_shown`]), with the edges resolved there; `None` where the
-/// backend does not show frames. The timings: `edge_aa` (finding the edges) and `indirect`
-/// (all the rest), with the method's own.
+/// ([`crate::methods::IndirectMethod::render_shown`]), with the edges resolved there;
+/// `None` where the backend does not show frames. The timings: `edge_aa` (finding the
+/// edges) and `indirect` (all the rest), with the method's own.
 #[allow(clippy::too_many_arguments)]
 fn show(
     world: &World,

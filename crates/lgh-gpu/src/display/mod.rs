@@ -169,7 +169,8 @@ pub(crate) fn record<'c>(
 ) -> Result<Recorded, GpuError> {
     let n = g.len();
     let image = ctx.output("shown image", 16 * n as u64)?;
-    // The parts on the CPU uploaded, those that are not stood in for.
+    // A zero part (and no emission) is bound to a stand-in; the parts on the CPU are
+    // uploaded.
     let stand_in = ctx.output("no part", 16)?;
     let upload = |v: &[Vec3]| -> Result<Lease<'c>, GpuError> {
         let rows: Vec<Vec4> = v.iter().map(|c| c.extend(0.0)).collect();
@@ -493,12 +494,12 @@ pub(crate) fn show_frame(
     Ok((recorded.finish(&reads), times))
 }
 
-/// Shows an image made of parts on the CPU on the GPU, as [`record`] shows a frame's parts
+/// Shows an image made of parts on the CPU on the GPU, as a shown frame's parts are shown
 /// (the emission of `g` where `emission`, `direct`, `indirect`; empty parts are zero):
 /// for tests against the CPU's display.
 ///
 /// # Errors
-/// As [`record`], or the GPU failed.
+/// A buffer could not be leased, the image exceeds one dispatch, or the GPU failed.
 pub fn show_parts(
     ctx: &GpuContext,
     g: &GBuffer,

@@ -13,7 +13,10 @@
 //! these index (`held.rs`). The lights are binned into tiles on the GPU ([`crate::bins`],
 //! the CPU's lists) in the loop's submission; the steps after it (the interleaving blur,
 //! the ratio estimator with its a-trous filter) run on the GPU in the loop's submission
-//! ([`crate::ratio`]), and the CPU composites ([`LghFrame::finish_shadowed`]). Where a step
+//! ([`crate::ratio`]), and the CPU composites ([`LghFrame::finish_shadowed`]), or, for a
+//! frame shown on the GPU (`IndirectMethod::render_shown`, the viewer), the same submission
+//! goes on to the direct light, the temporal filter and the showing ([`crate::display`]),
+//! and only the frame's packed pixels come back. Where a step
 //! needs the grids on the CPU (lists longer than the GPU's binning holds: the CPU bins
 //! them; a grid built on the CPU beside ones on the GPU; a table past the adapter's
 //! buffers, sized for the most children a light may have), the frame is made again with the

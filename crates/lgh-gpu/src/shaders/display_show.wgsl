@@ -1,7 +1,8 @@
-// A shown frame added to the running mean and tone-mapped (lgh-render's display): the sum
-// restarts with the image (its non-finite components 0) or adds it, the mean is sum x (1 / frames), and each
-// channel is lgh-render's tonemap_pixel (non-finite to 0, x exposure, the ACES fit of
-// Narkowicz 2015, the sRGB curve, rounded to 8 bits), packed as 0x00RRGGBB.
+// A shown frame added to the running mean and tone-mapped (lgh-render's display): the
+// sum restarts with the image (its non-finite components 0) or adds it, the mean is
+// sum x (1 / frames), and each channel is lgh-render's tonemap_pixel (non-finite to 0,
+// x exposure, the ACES fit of Narkowicz 2015, the sRGB curve, rounded to 8 bits), packed
+// as 0x00RRGGBB.
 
 struct Params {
     pixels: u32,
