@@ -144,6 +144,22 @@ fn parts_shown_on_the_gpu_are_the_cpus_display() {
     );
 }
 
+/// The GPU's lgh at the viewer's settings (4 x 4 interleaving, 4 shadow samples, the edge
+/// resolve of a moving frame), small.
+fn viewer_settings() -> RenderSettings {
+    let mut s = RenderSettings {
+        width: 64,
+        height: 36,
+        vpls: 3000,
+        method: lgh_gpu::lgh::LGH_GPU,
+        edge_samples: 4,
+        ..RenderSettings::default()
+    };
+    s.tiling.interleave = Some(4);
+    s.shadows.samples = Some(4);
+    s
+}
+
 /// A change of the settings.
 type Change = fn(&mut RenderSettings);
 
@@ -159,16 +175,7 @@ type Change = fn(&mut RenderSettings);
 fn gpu_frames_shown_on_the_gpu_are_the_frames_brought_back() {
     for scene in [None, Some("test/two-rooms.toml")] {
         let world = common::world(scene);
-        let mut s = RenderSettings {
-            width: 64,
-            height: 36,
-            vpls: 3000,
-            method: lgh_gpu::lgh::LGH_GPU,
-            edge_samples: 4,
-            ..RenderSettings::default()
-        };
-        s.tiling.interleave = Some(4);
-        s.shadows.samples = Some(4);
+        let s = viewer_settings();
         let cases: [(&str, Change); 3] = [
             ("viewer", |_| {}),
             ("indirect", |s| s.component = Component::Indirect),
@@ -221,16 +228,7 @@ fn the_temporal_filter_on_the_gpu_is_the_cpus() {
     use lgh_render::sequence::Sequence;
     for scene in [None, Some("test/clutter.toml")] {
         let mut world = common::world(scene);
-        let mut s = RenderSettings {
-            width: 64,
-            height: 36,
-            vpls: 3000,
-            method: lgh_gpu::lgh::LGH_GPU,
-            edge_samples: 4,
-            ..RenderSettings::default()
-        };
-        s.tiling.interleave = Some(4);
-        s.shadows.samples = Some(4);
+        let mut s = viewer_settings();
         let rest = world.scene.camera();
         let lights = world.scene.lights.clone();
         let taa = Some(TemporalSettings::default());

@@ -168,9 +168,7 @@ fn recipe(
     let (w, h) = (s.width, s.height);
     let camera = world.scene.camera().frame(w, h).with_jitter(s.jitter);
     // A piece of a frame shades its rectangle and the guard band its filters reach.
-    let keep = s
-        .region
-        .map(|r| r.grown(crate::region::guard_band(s), w, h));
+    let keep = crate::region::shaded_rect(s);
     let g = t.time("gbuffer", || {
         let mut g = memory.gbuffer.take().unwrap_or_default();
         if !g.shows(world, &camera, w, h)

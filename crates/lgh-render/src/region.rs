@@ -176,6 +176,13 @@ pub fn guard_band(s: &crate::RenderSettings) -> u32 {
         .saturating_add(9)
 }
 
+/// The pixels a piece of a frame shades (`s.region` grown by its [`guard_band`], within
+/// the frame), or `None` for a whole frame.
+#[must_use]
+pub fn shaded_rect(s: &crate::RenderSettings) -> Option<Region> {
+    s.region.map(|r| r.grown(guard_band(s), s.width, s.height))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

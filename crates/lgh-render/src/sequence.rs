@@ -9,6 +9,7 @@ use crate::denoise::temporal::{TemporalFilter, TemporalSettings, TemporalTarget}
 use crate::display::{DisplayRequest, TaaRequest};
 use crate::frame::{Frame, render_frame_shown, render_frame_with};
 use crate::memory::FrameMemory;
+use crate::passes::edge_aa::EdgeResolve;
 use crate::progress::Progress;
 use crate::settings::{RenderError, RenderSettings};
 use crate::shading::ratio::composite;
@@ -49,7 +50,7 @@ impl Sequence {
         progress: &dyn Progress,
     ) -> Result<Frame, RenderError> {
         let f = render_frame_with(world, settings, progress, &mut self.memory)?;
-        Ok(self.filter(f, settings))
+        Ok(self.filter(world, f, settings))
     }
 
     /// [`Sequence::render`] for a viewer that shows the frame as `request` asks
@@ -77,13 +78,13 @@ impl Sequence {
             self.filtered_there = true;
             return Ok(f);
         }
-        Ok(self.filter(f, settings))
+        Ok(self.filter(world, f, settings))
     }
 
     /// Filters the frame `f` rendered with `settings` on the CPU (where the temporal
     /// filter is on): its indirect light recomposed from the filtered value, with its
     /// edges resolved again where the recipe resolved them.
-    fn filter(&mut self, mut f: Frame, settings: &RenderSettings) -> Frame {
+    fn filter(&mut self, world: &World, mut f: Frame, settings: &RenderSettings) -> Frame {
         let Some(taa) = self.taa else {
             return f;
         };
@@ -96,13 +97,23 @@ impl Sequence {
                 let r = &ratio.filtered;
                 let ratio = self.filter.apply(f.camera, &f.gbuffer, r, &ratio.raw, &taa);
                 let mut indirect = composite(&f.gbuffer, a, &ratio);
-                // The recipe resolved the edges of the indirect light it composed.
-                let edges = [settings.edge_samples, 0, 0, 0];
-                if settings.edge_samples > 1
-                    && settings.region.is_none()
-                    && let Some(r) = self.memory.edge_resolve.kept(&f.gbuffer, edges)
-                {
-                    r.apply(&mut indirect);
+                // The recipe resolved the edges of the indirect light it composed: the same
+                // resolve (kept for a whole frame; made again for a piece of one).
+                let samples = settings.edge_samples;
+                if samples > 1 {
+                    let keep = crate::region::shaded_rect(settings);
+                    let kept = self
+                        .memory
+                        .edge_resolve
+                        .kept(&f.gbuffer, [samples, 0, 0, 0]);
+                    match kept.filter(|_| keep.is_none()) {
+                        Some(r) => r.apply(&mut indirect),
+                        None => {
+                            let g = &f.gbuffer;
+                            EdgeResolve::new(world, &f.camera, g, samples, keep.as_ref())
+                                .apply(&mut indirect);
+                        }
+                    }
                 }
                 indirect
             }

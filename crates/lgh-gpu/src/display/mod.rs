@@ -75,6 +75,10 @@ struct ShowParams {
     exposure: f32,
 }
 
+/// The most threads whose running means (and temporal histories) are kept at a time; past
+/// that, all are dropped and start again (a viewer shows its frames on one thread).
+pub(crate) const MAX_THREADS: usize = 8;
+
 /// A thread's running mean on the GPU.
 #[derive(Debug)]
 struct Sum {
@@ -396,6 +400,10 @@ fn running_sum(ctx: &GpuContext, pixels: usize, restart: bool) -> (wgpu::Buffer,
         },
     };
     let out = (sum.buffer.clone(), sum.frames == 1, sum.frames);
+    if sums.len() >= MAX_THREADS {
+        // Threads that showed frames and ended leave their means: past a few, start over.
+        sums.clear();
+    }
     sums.insert(id, sum);
     out
 }

@@ -145,6 +145,9 @@ pub(crate) fn record<'c>(
         ],
     );
     batch.dispatch("temporal", &pipeline, &bind, n)?;
+    if all.len() >= super::MAX_THREADS {
+        all.clear();
+    }
     all.insert(
         id,
         History {
