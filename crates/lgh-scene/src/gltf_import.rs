@@ -33,13 +33,37 @@ pub(crate) struct Import {
     pub warnings: Vec<String>,
 }
 
+/// Validation problems named at most in a loading error (a Draco-compressed file lists
+/// one per accessor: a hundred).
+const MAX_PROBLEMS: usize = 3;
+
+/// `e` in one short line: of a validation's problems, the unsupported extensions first (they
+/// say why), then the first others, at most [`MAX_PROBLEMS`], and how many more there are.
+fn describe(e: &gltf::Error) -> String {
+    use gltf::json::validation::Error as Problem;
+    let gltf::Error::Validation(problems) = e else {
+        return e.to_string();
+    };
+    let mut sorted: Vec<_> = problems.iter().collect();
+    sorted.sort_by_key(|(_, p)| !matches!(p, Problem::Unsupported));
+    let mut line: Vec<String> = sorted
+        .iter()
+        .take(MAX_PROBLEMS)
+        .map(|(path, problem)| format!("{path}: {problem}"))
+        .collect();
+    if problems.len() > MAX_PROBLEMS {
+        line.push(format!("and {} more", problems.len() - MAX_PROBLEMS));
+    }
+    format!("invalid glTF: {}", line.join("; "))
+}
+
 /// Reads `path` as described in the module documentation.
 pub(crate) fn import(path: &Path) -> Result<Import, SceneError> {
     let bytes = read_capped(path, MAX_GLTF_BYTES, "glTF file")?;
     let gltf::Gltf { document, mut blob } = gltf::Gltf::from_slice(&bytes).map_err(|e| {
         let message = match crate::gltf_file::old_version(&bytes) {
             Some(v) => format!("glTF {v} is not supported (lgh reads glTF 2.0)"),
-            None => format!("cannot load glTF: {e}"),
+            None => format!("cannot load glTF: {}", describe(&e)),
         };
         SceneError::new(path, message)
     })?;
@@ -197,4 +221,32 @@ pub fn instanced_triangles(doc: &Document) -> u64 {
         stack.extend(node.children());
     }
     total
+}
+
+#[cfg(test)]
+mod describe_tests {
+    use super::*;
+
+    /// A file with a required extension lgh does not read and an accessor problem for each
+    /// of its many accessors is refused in one short line that names the extension.
+    #[test]
+    fn many_problems_make_one_short_line_naming_the_extension() {
+        let accessors: Vec<String> = (0..40)
+            .map(|_| {
+                r#"{"bufferView": 7, "componentType": 5126, "count": 3, "type": "VEC3"}"#.into()
+            })
+            .collect();
+        let json = format!(
+            r#"{{"asset": {{"version": "2.0"}}, "extensionsUsed": ["KHR_draco_mesh_compression"],
+            "extensionsRequired": ["KHR_draco_mesh_compression"], "accessors": [{}]}}"#,
+            accessors.join(",")
+        );
+        let Err(e) = gltf::Gltf::from_slice(json.as_bytes()) else {
+            panic!("loaded");
+        };
+        let line = describe(&e);
+        assert!(line.contains("KHR_draco_mesh_compression"), "{line}");
+        assert!(line.contains("more") && line.len() < 300, "{line}");
+        assert!(!line.contains('\n'));
+    }
 }
