@@ -339,6 +339,8 @@ fn show(
     request: DisplayRequest,
 ) -> Result<Option<(MethodOutput, Displayed, Timings)>, RenderError> {
     let mut t = Timings::default();
+    // The method gets `memory` while the edges borrow its cache: the cache is taken out for
+    // the frame and put back after it.
     let mut cache = std::mem::take(&mut memory.edge_resolve);
     let edges = if s.edge_samples > 1 {
         Some(t.time("edge_aa", || {
