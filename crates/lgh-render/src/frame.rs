@@ -223,16 +223,7 @@ fn recipe(
         t.0.extend(out.timings.0);
         out.radiance
     };
-    let inputs = MethodInputs {
-        world,
-        gbuffer: &g,
-        camera: &camera,
-        vpls: &vpls.vpls,
-        vpl_count: vpls.len(),
-        vpl_bins: vpls.kept_bins,
-        settings: s,
-        progress,
-    };
+    let inputs = method_inputs(world, &g, &camera, &vpls, s, progress);
     let name = if all_reflected {
         "path_tracing"
     } else {
@@ -276,6 +267,28 @@ fn recipe(
         camera,
         shown: None,
     })
+}
+
+/// What the frame's method gets: the frame's world, G-buffer, camera, VPLs (or their number
+/// where its backend keeps them), settings and progress.
+fn method_inputs<'a>(
+    world: &'a World,
+    g: &'a GBuffer,
+    camera: &'a CameraFrame,
+    vpls: &'a VplSet,
+    s: &'a RenderSettings,
+    progress: &'a dyn Progress,
+) -> MethodInputs<'a> {
+    MethodInputs {
+        world,
+        gbuffer: g,
+        camera,
+        vpls: &vpls.vpls,
+        vpl_count: vpls.len(),
+        vpl_bins: vpls.kept_bins,
+        settings: s,
+        progress,
+    }
 }
 
 /// The edge resolve of a frame: made for it, or kept in the frame memory.
@@ -349,16 +362,7 @@ fn show(
     } else {
         None
     };
-    let inputs = MethodInputs {
-        world,
-        gbuffer: g,
-        camera,
-        vpls: &vpls.vpls,
-        vpl_count: vpls.len(),
-        vpl_bins: vpls.kept_bins,
-        settings: s,
-        progress,
-    };
+    let inputs = method_inputs(world, g, camera, vpls, s, progress);
     let all = s.component == Component::All;
     let show = ShowInputs {
         direct: all,
