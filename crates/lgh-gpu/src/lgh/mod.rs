@@ -35,7 +35,6 @@ use lgh_core::lighting_grid::GridError;
 use lgh_core::timing::Timings;
 use lgh_render::denoise::atrous::AtrousParams;
 use lgh_render::memory::FrameMemory;
-use lgh_render::methods::lgh::settings::Selection;
 use lgh_render::methods::lgh::tables::LghTables;
 use lgh_render::methods::lgh::{
     DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt, LGH, LGH_UNSHADOWED, LghFrame, LghSettings,
@@ -360,7 +359,7 @@ pub fn supported(s: &LghSettings) -> Result<(), RenderError> {
     if s.jitter != JitterAt::Ray {
         return refuse("--jitter-at candidate");
     }
-    if s.selection != Selection::Stratified {
+    if !s.selection.is_stratified() {
         return refuse("--selection streaming");
     }
     Ok(())

@@ -3,7 +3,9 @@
 
 use glam::Vec4;
 use lgh_render::methods::MethodInputs;
+use lgh_render::methods::lgh::settings::Selection;
 use lgh_render::methods::lgh::tables::LghTables;
+use lgh_render::shading::strata::ScreenStrata;
 use rayon::prelude::*;
 
 use lgh_core::lighting_grid::representative::SLOTS;
@@ -52,7 +54,10 @@ pub(super) struct Params {
     ray_eps: f32,
     seed_lo: u32,
     seed_hi: u32,
-    _pad: [u32; 2],
+    /// The dithered strata's rotation c ([`ScreenStrata::key`]).
+    strata_key: u32,
+    /// Width x 256 + n x 2 + 1 with dithered strata, else 0 (`stratum_offset` in the shader).
+    strata_shape: u32,
     hier: [Hier; MAX_HIERARCHIES],
 }
 
@@ -263,6 +268,18 @@ impl Params {
         let mut hier = [Hier::default(); MAX_HIERARCHIES];
         hier[..p.hier.len()].copy_from_slice(&p.hier);
         let seed = i.settings.seed;
+        let (strata_key, strata_shape) = if i.settings.lgh.selection == Selection::Dithered {
+            let strata = ScreenStrata::new(seed, t.n);
+            let width = i.gbuffer.width;
+            if width >= 1 << 24 || strata.phases >= 128 {
+                return Err(GpuError::TooLarge(
+                    "the dithered strata's image width".into(),
+                ));
+            }
+            (strata.key, width << 8 | strata.phases << 1 | 1)
+        } else {
+            (0, 0)
+        };
         Ok(Self {
             pixels: u32::try_from(i.gbuffer.len())
                 .map_err(|_| GpuError::TooLarge("pixels".into()))?,
@@ -275,7 +292,8 @@ impl Params {
             ray_eps: i.world.ray_epsilon,
             seed_lo: seed as u32,
             seed_hi: (seed >> 32) as u32,
-            _pad: [0; 2],
+            strata_key,
+            strata_shape,
             hier,
         })
     }

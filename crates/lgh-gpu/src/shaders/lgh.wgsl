@@ -43,8 +43,11 @@ struct Params {
     ray_eps: f32,
     seed_lo: u32,
     seed_hi: u32,
-    _p0: u32,
-    _p1: u32,
+    // The dithered strata (lgh-render's shading::strata): the frame's rotation c in units of
+    // 2^-32, and the image width times 256 plus the interleaving n times 2 plus 1 where
+    // the selection is dithered (0: independent offsets).
+    strata_key: u32,
+    strata_shape: u32,
     hier: array<Hier, 8>,
 }
 
@@ -95,6 +98,22 @@ var<private> rng_state: u32;
 fn next_f32() -> f32 {
     rng_state = hash(rng_state);
     return f32(rng_state >> 8u) * (1.0 / 16777216.0);
+}
+
+// The offset u_s of pixel i's stratum s: independent (the pixel's stream), or dithered over
+// the screen, frac(a_1 x' + a_2 y' + c + s g) with (x', y') the pixel's place in its
+// sub-image (lgh-render's shading::strata, the same integers).
+fn stratum_offset(i: u32, s: u32) -> f32 {
+    let shape = params.strata_shape;
+    if ((shape & 1u) == 0u) {
+        return next_f32();
+    }
+    let width = shape >> 8u;
+    let n = max((shape >> 1u) & 127u, 1u);
+    let xs = (i % width) / n;
+    let ys = (i / width) / n;
+    let v = xs * 3242174889u + ys * 2447445414u + params.strata_key + s * 0x9E3779B9u;
+    return f32(v >> 8u) * (1.0 / 16777216.0);
 }
 
 // B_l(d) for t = d / r_l with the role's floors (lgh_core::blending::LevelRole::floors).
@@ -405,7 +424,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         // thresholds in order, walking only the chunks they fall in (at most k of the
         // CHUNKS), from the first pass's running weight at the chunk's start.
         var s = 0u;
-        var t = next_f32() / f32(k) * total;
+        var t = stratum_offset(i, 0u) / f32(k) * total;
         var acc = 0.0;
         let chunks = (last - first + size - 1u) / size;
         for (var ch = 0u; ch < chunks && s < k; ch++) {
@@ -427,7 +446,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                     picked[s] = j;
                     picked_cf[s] = vec4<f32>(c, f);
                     s++;
-                    t = (f32(s) + next_f32()) / f32(k) * total;
+                    t = (f32(s) + stratum_offset(i, s)) / f32(k) * total;
                 }
             }
         }

@@ -6,6 +6,7 @@
 //! | [`tiles`] | screen-tile binning of light volumes, per sub-image |
 //! | [`interleave`] | interleaved sampling: sub-image lattices, split/merge, the discontinuity-aware blur |
 //! | [`reservoirs`] | the k shadow-sample reservoirs a pixel keeps while it is shaded (LGH Appendix A) |
+//! | [`strata`] | screen-space dithered strata for the stratified selection |
 //! | [`shadow_pass`] | shading in bands of rows, one shadow ray per selected sample |
 //! | [`ratio`] | the ratio estimator: filtered S / U, composited with the unshadowed sum |
 
@@ -13,4 +14,5 @@ pub mod interleave;
 pub mod ratio;
 pub mod reservoirs;
 pub mod shadow_pass;
+pub mod strata;
 pub mod tiles;

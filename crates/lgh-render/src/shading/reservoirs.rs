@@ -223,7 +223,9 @@ pub fn pass_over(res: &mut [Reservoir<ShadowSample>], sum: f32) -> bool {
 
 /// Selects `k` lights of a pixel in proportion to their weights f_j by inverting the
 /// cumulative weight with stratified numbers: sample i takes the light where the running
-/// total reaches t_i = (i + u_i) / k * F, u_i uniform, F = sum of f_j. The lights come in
+/// total reaches t_i = (i + u_i) / k * F, u_i = `u(i)` uniform in [0, 1) (independent
+/// numbers, or the screen's dithered strata of [`crate::shading::strata`]), F = sum of
+/// f_j. The lights come in
 /// chunks of `N`: `chunk_weights[c]` is the (sequential) sum of chunk c's weights, and
 /// `lanes(c)` evaluates the chunk again, giving its lights' weights and a payload for
 /// `take(i, lane, &payload, f_j, F)`, called once per sample in order of i.
@@ -239,7 +241,7 @@ pub fn stratified_picks<const N: usize, V>(
     chunk_weights: &[f32],
     mut lanes: impl FnMut(usize) -> ([f32; N], V),
     k: usize,
-    rng: &mut Rng,
+    mut u: impl FnMut(usize) -> f32,
     mut take: impl FnMut(usize, usize, &V, f32, f32),
 ) {
     let total: f32 = chunk_weights.iter().sum();
@@ -253,7 +255,7 @@ pub fn stratified_picks<const N: usize, V>(
     let (mut c, mut below) = (0, 0.0f32);
     let mut cached: Option<(usize, [f32; N], V)> = None;
     for i in 0..k {
-        let t = (i as f32 + rng.next_f32()) / k as f32 * total;
+        let t = (i as f32 + u(i)) / k as f32 * total;
         while c < last && below + chunk_weights[c] <= t {
             below += chunk_weights[c];
             c += 1;
@@ -284,6 +286,7 @@ pub fn stratified_picks<const N: usize, V>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shading::strata::ScreenStrata;
 
     /// Chi-square statistic of `counts` against expected shares `p` (which sum to 1) of
     /// `n` draws, over the entries with p > 0; and whether an entry with p = 0 was drawn.
@@ -303,7 +306,8 @@ mod tests {
 
     /// Every sample of [`stratified_picks`] alone draws light j with probability f_j / F:
     /// 23 lights in chunks of 4 (zeros, a zero chunk, weights over two decades), k = 1, 3
-    /// and 4, 100,000 pixels; chi-square per sample below the 0.999 quantile for its 17
+    /// and 4, 100,000 pixels (and k = 3 and 4 for one pixel's dithered strata over 100,000
+    /// frames, `crate::shading::strata`); chi-square per sample below the 0.999 quantile for its 17
     /// degrees of freedom (40.8), never a light of weight 0. And sample i lies in stratum i:
     /// its light's cumulative interval meets [i F / k, (i + 1) F / k].
     #[test]
@@ -334,12 +338,27 @@ mod tests {
             })
             .collect();
         let n = 100_000u32;
-        for k in [1usize, 3, 4] {
+        // Independent offsets, and one pixel's dithered strata over n frames.
+        for (k, dithered) in [
+            (1usize, false),
+            (3, false),
+            (4, false),
+            (3, true),
+            (4, true),
+        ] {
             let mut counts = vec![vec![0u32; f.len()]; k];
             let mut rng = Rng::new(&[k as u64, 99]);
-            for _ in 0..n {
+            for frame in 0..n {
                 let mut seen = 0;
-                stratified_picks(&chunks, lanes, k, &mut rng, |i, l, &c, w, total| {
+                let strata = ScreenStrata::new(u64::from(frame), 2).pixel(37, 11);
+                let mut u = |i| {
+                    if dithered {
+                        strata.u(i)
+                    } else {
+                        rng.next_f32()
+                    }
+                };
+                stratified_picks(&chunks, lanes, k, &mut u, |i, l, &c, w, total| {
                     let j = c * N + l;
                     assert_eq!(i, seen, "samples in order");
                     seen += 1;
@@ -397,7 +416,7 @@ mod tests {
                 &chunks,
                 |_| ([1.0f32; 2], ()),
                 4,
-                &mut rng,
+                |_| rng.next_f32(),
                 |_, _, _, _, _| panic!("nothing to draw from {chunks:?}"),
             );
         }

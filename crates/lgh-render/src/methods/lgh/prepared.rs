@@ -20,7 +20,7 @@ use super::LghStats;
 use super::lights::{LghTargets, ShadeLights};
 use super::normal_bins::{NORMAL_BINS, split_by_normal};
 use super::settings::{DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt};
-use super::settings::{ShadowTarget, auto_tile};
+use super::settings::{Selection, ShadowTarget, auto_tile};
 use super::shade::{RowContext, RowScratch, shade_rows};
 use super::tables::DeviceKeeps;
 use crate::memory::FrameMemory;
@@ -33,6 +33,7 @@ use crate::shading::ratio::{
 };
 use crate::shading::reservoirs::ReservoirLayout;
 use crate::shading::shadow_pass::{ShadowEstimates, ShadowPass, Targets};
+use crate::shading::strata::ScreenStrata;
 use crate::shading::tiles::{AllBounds, BinLights, InterleavedBins};
 
 /// Random-stream tag of the grid offset of `--grid-jitter`.
@@ -415,6 +416,8 @@ impl LghFrame {
             eps2: self.eps2,
             seed,
             phases: self.n as usize,
+            strata: (settings.selection == Selection::Dithered)
+                .then(|| ScreenStrata::new(seed, self.n)),
         };
         let targets = LghTargets {
             lights: &self.lights,

@@ -135,8 +135,20 @@ pub enum Selection {
     /// Appendix A).
     Streaming,
     /// The pixel's cumulative weight inverted at k stratified points, one pass over its
-    /// lights (`shading::reservoirs::stratified_picks`); the default.
+    /// lights (`shading::reservoirs::stratified_picks`), with independent offsets per pixel.
     Stratified,
+    /// The same, with the strata's offsets dithered over the screen
+    /// (`shading::strata`): neighbouring pixels of a sub-image spread their samples over
+    /// their lights jointly, so the filters average fewer repeats; the default.
+    Dithered,
+}
+
+impl Selection {
+    /// True if the k samples are drawn by stratified inversion after the pixel's loop.
+    #[must_use]
+    pub fn is_stratified(self) -> bool {
+        matches!(self, Self::Stratified | Self::Dithered)
+    }
 }
 
 impl Default for LghSettings {
@@ -152,7 +164,7 @@ impl Default for LghSettings {
             grid_jitter: false,
             emission: GridEmission::EnergyConserving,
             jitter: JitterAt::Ray,
-            selection: Selection::Stratified,
+            selection: Selection::Dithered,
             shadow_target: ShadowTarget::Representative,
             estimator: Estimator::Unbiased,
             only_level: None,

@@ -12,11 +12,12 @@ use lgh_core::vpl::light_irradiance;
 
 use crate::methods::lgh::light_batch::{LANES, LaneResult, LightBatch, PackedLight};
 use crate::methods::lgh::lights::ShadeLights;
-use crate::methods::lgh::settings::{JitterAt, LghSettings, Selection};
+use crate::methods::lgh::settings::{JitterAt, LghSettings};
 use crate::passes::gbuffer::GBuffer;
 use crate::shading::reservoirs::{
     ReservoirLayout, ShadowSample, halves, offer, pass_over, stratified_picks,
 };
+use crate::shading::strata::ScreenStrata;
 use crate::shading::tiles::InterleavedBins;
 
 /// Random-stream tag of the LGH lighting pass.
@@ -36,6 +37,8 @@ pub(super) struct RowContext<'a> {
     pub(super) seed: u64,
     /// Interleaving n: pixels of a row cycle through n sub-images.
     pub(super) phases: usize,
+    /// The frame's dithered strata, where the selection is [`Selection::Dithered`].
+    pub(super) strata: Option<ScreenStrata>,
 }
 
 impl RowContext<'_> {
@@ -165,7 +168,7 @@ fn shade_pixel(
     } = scratch;
     // Stratified selection applies where targets are drawn after selection.
     let stratified =
-        k > 0 && settings.jitter == JitterAt::Ray && settings.selection == Selection::Stratified;
+        k > 0 && settings.jitter == JitterAt::Ray && settings.selection.is_stratified();
     let i = y * g.width as usize + x;
     if !g.is_hit(i) {
         return;
@@ -277,6 +280,12 @@ fn shade_pixel(
                 threshold: 0.0,
             };
         };
-        stratified_picks(chunk_weights, lanes, k, &mut rng, take);
+        match ctx.strata {
+            Some(strata) => {
+                let px = strata.pixel(x as u32, y as u32);
+                stratified_picks(chunk_weights, lanes, k, |i| px.u(i), take);
+            }
+            None => stratified_picks(chunk_weights, lanes, k, |_| rng.next_f32(), take),
+        }
     }
 }
