@@ -8,19 +8,16 @@
 //! `--reference`), with the mean of the first half of their frames beside them
 //! (`NAME.half.exr`): the FLIP between the two says how far the reference is from converged.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use anyhow::{Result, anyhow, bail};
-use lgh_render::methods::brute::BRUTE;
+use anyhow::{Result, bail};
 use lgh_render::methods::lgh::LGH;
 use lgh_render::methods::slc::SLC;
 use lgh_render::{Image, RenderSettings, World};
 
 use crate::bench_cmd::open_scene;
-use crate::bench_quality::{
-    Point, QualityBenchArgs, indirect_only, measure, ms, prefix_means, render,
-};
-use crate::render_cmd::args::Device;
+use crate::bench_quality::{Point, QualityBenchArgs, indirect_only, measure, ms, render};
+use crate::bench_reference::{print_references, reference};
 
 /// The curves of the sweep: (series name, the method it belongs to, settings without the
 /// VPL count): lgh at each of `--alphas` x `--interleaves` x `--shadow-samples`, slc at each
@@ -95,15 +92,6 @@ fn curves(args: &QualityBenchArgs) -> Vec<(String, &'static str, RenderSettings)
 /// How much lower than slc's both of lgh's errors must be to count as a win (the quality
 /// issue's 15%).
 pub const WIN_MARGIN: f64 = 0.15;
-
-/// A converged reference and what is known of its convergence.
-pub struct Reference {
-    /// The mean of every frame.
-    pub image: Image,
-    /// FLIP of the mean of the first half of the frames against the whole mean, if that
-    /// half is known.
-    pub half_flip: Option<f64>,
-}
 
 /// A method at its best curve and VPL count within a budget.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -188,138 +176,6 @@ pub fn pick(points: &[Point], scene: &str, method: &str, budget: f64) -> Option<
     })
 }
 
-/// A short fingerprint of the scene file (path, size, modification time), so that a cached
-/// reference of an edited scene is not reused.
-fn fingerprint(path: &Path) -> u64 {
-    let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
-    let meta = std::fs::metadata(&canonical).ok();
-    let modified = meta
-        .as_ref()
-        .and_then(|m| m.modified().ok())
-        .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
-        .map_or(0, |d| d.as_secs());
-    let text = canonical.to_string_lossy();
-    let mut words: Vec<u64> = text.bytes().map(u64::from).collect();
-    words.push(meta.map_or(0, |m| m.len()));
-    words.push(modified);
-    lgh_core::rng::hash(&words)
-}
-
-/// Where the reference of `scene` is cached by default.
-fn cached_path(args: &QualityBenchArgs, name: &str, scene: &Path) -> PathBuf {
-    let (w, h) = args.size;
-    args.reference_dir.join(format!(
-        "{name}-{:08x}-{w}x{h}-{}x{}.exr",
-        fingerprint(scene) as u32,
-        args.reference_frames,
-        args.reference_vpls
-    ))
-}
-
-/// The file beside `reference` that holds the mean of its first half.
-fn half_path(reference: &Path) -> PathBuf {
-    reference.with_extension("half.exr")
-}
-
-/// Loads the reference at `path` (with its half, if there), checking its size.
-fn load(path: &Path, size: (u32, u32), exposure: f32) -> Result<Reference> {
-    let image = Image::load(path).map_err(|e| anyhow!("reference {}: {e}", path.display()))?;
-    if (image.width, image.height) != size {
-        bail!(
-            "reference {}: {}x{}, the benchmark renders {}x{} (--size)",
-            path.display(),
-            image.width,
-            image.height,
-            size.0,
-            size.1
-        );
-    }
-    let half = Image::load(&half_path(path))
-        .ok()
-        .filter(|h| (h.width, h.height) == size);
-    let half_flip = match half {
-        Some(h) => Some(measure(&h, &image, exposure)?.1),
-        None => None,
-    };
-    Ok(Reference { image, half_flip })
-}
-
-/// Renders the converged reference: the mean of `--reference-frames` brute-force frames of
-/// `--reference-vpls` VPLs each, every frame with its own VPLs and sub-pixel position, and
-/// the fixed 1/d^2 clamp of many VPLs (`--vpl-clamp 0`).
-fn compute(world: &World, args: &QualityBenchArgs, name: &str) -> Result<(Image, Image)> {
-    let frames = args.reference_frames;
-    let method = match args.reference_device {
-        Device::Cpu => BRUTE,
-        Device::Gpu => {
-            let gpu = lgh_gpu::gpu_method(BRUTE)
-                .ok_or_else(|| lgh_gpu::GpuError::NotPorted("brute".into()))?;
-            if !args.options.json {
-                eprintln!("GPU: {}", lgh_gpu::GpuContext::shared()?.adapter_name());
-            }
-            gpu
-        }
-    };
-    // The limit of many VPLs: the fixed clamp, whatever the VPLs of a frame.
-    let base = RenderSettings {
-        method,
-        vpl_clamp: 0.0,
-        ..indirect_only(args.size, args.reference_vpls)
-    };
-    let bar = crate::progress_bar::counter(
-        args.options.json,
-        u64::from(frames),
-        &format!("{name}: reference"),
-    );
-    let mut means = prefix_means(world, &base, frames, &[frames / 2, frames], || bar.inc(1))?;
-    bar.finish_and_clear();
-    let whole = means.pop().map(|(_, m)| m);
-    let half = means.pop().map(|(_, m)| m);
-    let whole = whole.ok_or_else(|| anyhow!("no reference frame rendered"))?;
-    Ok((half.unwrap_or_else(|| whole.clone()), whole))
-}
-
-/// The reference of one scene: the file `--reference` names for it, else the cache; loaded
-/// if there, else rendered and written there (with its half).
-fn reference(
-    world: &World,
-    args: &QualityBenchArgs,
-    name: &str,
-    scene: &Path,
-    index: usize,
-) -> Result<Reference> {
-    let exposure = world.scene.exposure;
-    let path = match args.reference.get(index) {
-        Some(p) => p.clone(),
-        None => cached_path(args, name, scene),
-    };
-    if path.exists() {
-        if !args.options.json {
-            eprintln!("{name}: reference {}", path.display());
-        }
-        return load(&path, args.size, exposure);
-    }
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| anyhow!("reference folder {}: {e}", dir.display()))?;
-    }
-    if !args.options.json {
-        eprintln!(
-            "{name}: converged reference, {} brute-force frames of {} VPLs -> {}",
-            args.reference_frames,
-            args.reference_vpls,
-            path.display()
-        );
-    }
-    let (half, image) = compute(world, args, name)?;
-    half.save(&half_path(&path), exposure)?;
-    image.save(&path, exposure)?;
-    let half_flip = (args.reference_frames >= 2)
-        .then(|| measure(&half, &image, exposure).map(|m| m.1))
-        .transpose()?;
-    Ok(Reference { image, half_flip })
-}
-
 /// The sweep of one method on one scene: each VPL count in turn until the time passes the
 /// largest budget (larger counts only take longer). Each point's time is the median of
 /// `--runs` renders.
@@ -387,6 +243,7 @@ pub fn run(args: &QualityBenchArgs, scenes: &[PathBuf], threads: usize) -> Resul
     let mut points = Vec::new();
     let mut names = Vec::new();
     let mut convergence = Vec::new();
+    let mut paths = Vec::new();
     if !args.reference.is_empty() && args.reference.len() != scenes.len() {
         bail!(
             "--reference: {} given for {} scene(s); name one file per scene, in order",
@@ -397,7 +254,12 @@ pub fn run(args: &QualityBenchArgs, scenes: &[PathBuf], threads: usize) -> Resul
     for (index, path) in scenes.iter().enumerate() {
         let (name, world) = open_scene(Some(path), &args.options)?;
         let reference = reference(&world, args, &name, path, index)?;
-        for (series, _, settings) in curves(args) {
+        let curves = if args.references_only {
+            Vec::new()
+        } else {
+            curves(args)
+        };
+        for (series, _, settings) in curves {
             if !args.options.json {
                 eprintln!("{name}: {series} at up to {} VPL counts", args.sweep.len());
             }
@@ -411,6 +273,10 @@ pub fn run(args: &QualityBenchArgs, scenes: &[PathBuf], threads: usize) -> Resul
         }
         convergence.push((name.clone(), reference.half_flip));
         names.push(name);
+        paths.push(reference.path);
+    }
+    if args.references_only {
+        return print_references(args, &convergence, &paths);
     }
     crate::bench_plot::plot(&args.plot, &names, &points)?;
     let rows = table(&points, &names, &args.budgets);

@@ -91,6 +91,11 @@ pub struct QualityBenchArgs {
     /// DX12) converges them in a fraction of the time on a real GPU.
     #[arg(long, value_enum, default_value_t = crate::render_cmd::args::Device::Cpu)]
     pub reference_device: crate::render_cmd::args::Device,
+    /// --equal-time: make (or load) each scene's converged reference, print its file and
+    /// how converged it is, and stop without the sweep: for a machine that makes references
+    /// (with `--reference-device gpu`) for a sweep run elsewhere with `--reference`.
+    #[arg(long, requires = "equal_time")]
+    pub references_only: bool,
     /// --equal-time: VPLs of each reference frame.
     #[arg(long, default_value_t = 20_000, value_parser = crate::caps::count(crate::caps::MAX_BENCH_VPLS))]
     pub reference_vpls: usize,

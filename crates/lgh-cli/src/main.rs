@@ -12,6 +12,7 @@ mod bench_cmd;
 mod bench_equal_time;
 mod bench_plot;
 mod bench_quality;
+mod bench_reference;
 mod bench_render;
 mod bench_slc;
 mod bench_temporal;

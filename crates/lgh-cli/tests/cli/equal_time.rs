@@ -132,6 +132,65 @@ fn equal_time_sweeps_both_methods_against_a_cached_reference() {
     }
 }
 
+/// `--references-only` writes each scene's reference and its half, reports them (the file
+/// and its convergence) and runs no sweep; a later sweep reads the same file. Without
+/// `--equal-time` the flag is refused.
+#[test]
+fn references_only_makes_the_references_and_stops() {
+    let d = temp_dir("references-only");
+    let refs = d.join("refs");
+    let base = [
+        "bench",
+        "quality",
+        "--equal-time",
+        "builtin:cornell",
+        "--size",
+        "32x18",
+        "--reference-frames",
+        "2",
+        "--reference-vpls",
+        "300",
+        "--reference-dir",
+        s(&refs),
+        "--json",
+    ];
+    let out = lgh(&[&base[..], &["--references-only"]].concat());
+    assert_ok(&out);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v.get("points").is_none(), "{v}");
+    let list = v["references"].as_array().unwrap();
+    assert_eq!(list.len(), 1);
+    assert_eq!(list[0]["scene"], "cornell");
+    assert!(list[0]["half_flip"].as_f64().unwrap() > 0.0);
+    let file = std::path::PathBuf::from(list[0]["reference"].as_str().unwrap());
+    assert!(file.starts_with(&refs) && file.exists(), "{file:?}");
+    assert_eq!(std::fs::read_dir(&refs).unwrap().count(), 2);
+    // The sweep then reads it: no third file, and the table says the same convergence.
+    let plot = d.join("et.png");
+    let sweep = [
+        "--sweep",
+        "100",
+        "--budgets",
+        "1e7",
+        "--runs",
+        "1",
+        "--plot",
+        s(&plot),
+    ];
+    let out = lgh(&[&base[..], &sweep[..]].concat());
+    assert_ok(&out);
+    let v2: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        v2["convergence"][0]["half_flip"], list[0]["half_flip"],
+        "{v2}"
+    );
+    assert_eq!(std::fs::read_dir(&refs).unwrap().count(), 2);
+    assert_error(
+        &lgh(&["bench", "quality", "builtin:cornell", "--references-only"]),
+        &["--references-only", "--equal-time"],
+    );
+}
+
 /// `--reference-device gpu` renders the reference's brute force on the GPU (lavapipe in CI):
 /// the same image as the CPU's within rel_rmse 0.002 (the GPU issue's bound for the brute
 /// force; measured 3e-7 on lavapipe).
