@@ -17,7 +17,7 @@ use lgh_render::{Image, RenderSettings, World};
 
 use crate::bench_cmd::open_scene;
 use crate::bench_quality::{Point, QualityBenchArgs, indirect_only, measure, ms, render};
-use crate::bench_reference::{print_references, reference};
+use crate::bench_reference::{print_references, reference, settings_json};
 
 /// The curves of the sweep: (series name, the method it belongs to, settings without the
 /// VPL count): lgh at each of `--alphas` x `--interleaves` x `--shadow-samples`, slc at each
@@ -281,18 +281,21 @@ pub fn run(args: &QualityBenchArgs, scenes: &[PathBuf], threads: usize) -> Resul
     crate::bench_plot::plot(&args.plot, &names, &points)?;
     let rows = table(&points, &names, &args.budgets);
     if args.options.json {
-        let v = serde_json::json!({
-            "threads": threads,
-            "width": args.size.0,
-            "height": args.size.1,
-            "reference_frames": args.reference_frames,
-            "reference_vpls": args.reference_vpls,
-            "points": points,
-            "table": rows,
-            "convergence": convergence.iter().map(|(s, f)| serde_json::json!({"scene": s, "half_flip": f})).collect::<Vec<_>>(),
-            "plot": args.plot,
-        });
-        println!("{v}");
+        let mut v = settings_json(args);
+        let convergence: Vec<_> = convergence
+            .iter()
+            .map(|(s, f)| serde_json::json!({"scene": s, "half_flip": f}))
+            .collect();
+        for (key, value) in [
+            ("threads", serde_json::json!(threads)),
+            ("points", serde_json::json!(points)),
+            ("table", serde_json::json!(rows)),
+            ("convergence", serde_json::json!(convergence)),
+            ("plot", serde_json::json!(args.plot)),
+        ] {
+            v.insert(key.into(), value);
+        }
+        println!("{}", serde_json::Value::Object(v));
         return Ok(());
     }
     print_table(args, &points, &rows, &convergence, threads);

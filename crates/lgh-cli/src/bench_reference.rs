@@ -165,6 +165,16 @@ pub fn reference(
     })
 }
 
+/// The benchmark's image size and reference settings, the head of its JSON output.
+pub fn settings_json(args: &QualityBenchArgs) -> serde_json::Map<String, serde_json::Value> {
+    let mut v = serde_json::Map::new();
+    v.insert("width".into(), args.size.0.into());
+    v.insert("height".into(), args.size.1.into());
+    v.insert("reference_frames".into(), args.reference_frames.into());
+    v.insert("reference_vpls".into(), args.reference_vpls.into());
+    v
+}
+
 /// `--references-only`: each scene's reference file and how converged it is, as text or
 /// JSON.
 pub fn print_references(
@@ -184,18 +194,11 @@ pub fn print_references(
         let adapter = (args.reference_device == Device::Gpu)
             .then(|| lgh_gpu::GpuContext::shared().map(|c| c.adapter_name()).ok())
             .flatten();
-        println!(
-            "{}",
-            serde_json::json!({
-                "device": args.reference_device,
-                "adapter": adapter,
-                "width": args.size.0,
-                "height": args.size.1,
-                "reference_frames": args.reference_frames,
-                "reference_vpls": args.reference_vpls,
-                "references": list,
-            })
-        );
+        let mut v = settings_json(args);
+        v.insert("device".into(), serde_json::json!(args.reference_device));
+        v.insert("adapter".into(), serde_json::json!(adapter));
+        v.insert("references".into(), serde_json::json!(list));
+        println!("{}", serde_json::Value::Object(v));
         return Ok(());
     }
     for ((scene, flip), path) in convergence.iter().zip(paths) {
