@@ -83,7 +83,7 @@ pub fn run(args: &RenderBenchArgs) -> Result<()> {
         let t = Instant::now();
         if !shadowed
             .get()
-            .trace_gbuffer(&world, &frame, (w, h), &mut g)?
+            .trace_gbuffer(&world, &frame, (w, h), &mut g, false)?
         {
             g.render_into(&world, &frame, w, h);
         }

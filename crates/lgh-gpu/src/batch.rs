@@ -8,6 +8,20 @@ use rayon::prelude::*;
 use crate::context::{GpuContext, GpuError};
 use crate::pool::Lease;
 
+thread_local! {
+    /// Bytes this thread's batches have copied back to the CPU ([`read_back_bytes`]).
+    static READ_BACK: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// The bytes that batches recorded on this thread have copied back from the GPU so far
+/// ([`Batch::read`]); a frame's are the difference before and after it. The viewer's
+/// shown frames of a moving camera read back their packed pixels (4 bytes a pixel), not
+/// the G-buffer's planes (80).
+#[must_use]
+pub fn read_back_bytes() -> u64 {
+    READ_BACK.with(std::cell::Cell::get)
+}
+
 /// Timed passes one batch holds at most (further passes run untimed).
 const MAX_TIMED: u32 = 128;
 
@@ -158,6 +172,7 @@ impl<'c> Batch<'c> {
         self.enc
             .copy_buffer_to_buffer(from, 0, staging.buffer(), 0, bytes.next_multiple_of(4));
         self.reads.push(staging);
+        READ_BACK.with(|r| r.set(r.get() + bytes));
         Ok(())
     }
 

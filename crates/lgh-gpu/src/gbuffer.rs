@@ -130,12 +130,24 @@ pub(crate) struct GBufferCache {
 }
 
 impl GpuContext {
-    /// `g` on the GPU: the last uploaded G-buffer if `g` has the same planes, else `g`
+    /// `g` on the GPU: where this context kept its planes there ([`GBuffer::defer_planes`]),
+    /// that G-buffer; the last uploaded G-buffer if `g` has the same planes; else `g`
     /// packed (in parallel, straight into the upload's staging memory) and uploaded.
     ///
     /// # Errors
-    /// Larger than the adapter's largest storage buffer.
+    /// Larger than the adapter's largest storage buffer, or deferred planes of another
+    /// context could not be read back.
     pub fn gbuffer(&self, g: &GBuffer) -> Result<Arc<GpuGBuffer>, GpuError> {
+        // Planes this context kept on the GPU: there. (Another context's: read back.)
+        let kept = g
+            .device_planes()
+            .and_then(|r| r.as_any().downcast_ref::<OnDevice>());
+        if let Some(on) = kept.filter(|on| std::ptr::eq(on.ctx, self)) {
+            return Ok(Arc::clone(&on.gbuffer));
+        }
+        let g = g
+            .planes()
+            .map_err(|e| GpuError::Failed(format!("the G-buffer's planes: {e}")))?;
         let cache = &self.gbuffers().last;
         if let Some(last) = cache
             .lock()
@@ -187,25 +199,66 @@ impl GpuContext {
     /// [`crate::primary`]), with its `emission`, the last uploaded G-buffer, so that the
     /// frame's passes read it where it is. No copy of its planes is kept: a G-buffer whose
     /// view is unknown is never taken for it.
-    pub(crate) fn adopt_gbuffer(&self, buffer: wgpu::Buffer, g: &GBuffer, emission: GpuEmission) {
+    pub(crate) fn adopt_gbuffer(
+        &self,
+        buffer: wgpu::Buffer,
+        (width, height): (u32, u32),
+        view: (u64, CameraFrame),
+        emission: GpuEmission,
+    ) -> Arc<GpuGBuffer> {
         let up = Arc::new(GpuGBuffer {
             buffer,
-            planes: (g.width, g.height, Default::default()),
-            view: g.view,
+            planes: (width, height, Default::default()),
+            view: Some(view),
             emission,
         });
         *self
             .gbuffers()
             .last
             .lock()
-            .unwrap_or_else(PoisonError::into_inner) = Some(up);
+            .unwrap_or_else(PoisonError::into_inner) = Some(Arc::clone(&up));
+        up
+    }
+}
+
+/// The planes of a G-buffer traced on the GPU and left there
+/// ([`GBuffer::defer_planes`]): read back from its packed pixels and emission when the
+/// CPU asks for them.
+pub(crate) struct OnDevice {
+    pub ctx: &'static GpuContext,
+    pub gbuffer: Arc<GpuGBuffer>,
+}
+
+impl lgh_render::passes::gbuffer::DevicePlanes for OnDevice {
+    fn read_into(&self, g: &mut GBuffer) -> Result<(), String> {
+        let n = g.width as usize * g.height as usize;
+        let mut batch = crate::batch::Batch::new(self.ctx);
+        let read = |e: GpuError| e.to_string();
+        batch
+            .read(&self.gbuffer.buffer, n as u64 * PIXEL_BYTES)
+            .map_err(read)?;
+        if let GpuEmission::Kept(emission) = &self.gbuffer.emission {
+            batch.read(emission, n as u64 * 16).map_err(read)?;
+        }
+        let (reads, _) = batch.finish().map_err(read)?;
+        let pixels: &[[glam::Vec4; 4]] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
+        let emitted: Option<&[glam::Vec4]> = reads.get(1).map(|r| bytemuck::cast_slice(r));
+        if pixels.len() < n || emitted.is_some_and(|e| e.len() < n) {
+            return Err("the G-buffer's read-back is missing".into());
+        }
+        unpack(g, &pixels[..n], emitted.map(|e| &e[..n]));
+        Ok(())
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
     }
 }
 
 /// The planes of `g` from the packed pixels `packed` (as [`pack_into`] packs them) and the
-/// emitted radiance `emission`, one `Vec4` each per pixel, reusing the planes' memory; `g`'s
-/// width, height and view are set by the caller.
-pub(crate) fn unpack(g: &mut GBuffer, packed: &[[glam::Vec4; 4]], emission: &[glam::Vec4]) {
+/// emitted radiance `emission` (`None`: zero), one `Vec4` each per pixel, reusing the
+/// planes' memory; `g`'s width, height and view are set by the caller.
+pub(crate) fn unpack(g: &mut GBuffer, packed: &[[glam::Vec4; 4]], emission: Option<&[glam::Vec4]>) {
     fn fill<T: Send + Copy + Default>(
         plane: &mut Vec<T>,
         packed: &[[glam::Vec4; 4]],
@@ -224,9 +277,9 @@ pub(crate) fn unpack(g: &mut GBuffer, packed: &[[glam::Vec4; 4]], emission: &[gl
     fill(&mut g.depth, packed, |p| {
         if p[0].w > 0.0 { p[3].w } else { f32::INFINITY }
     });
-    g.emission.resize(packed.len(), Vec3::ZERO);
-    g.emission
-        .par_iter_mut()
-        .zip(emission)
-        .for_each(|(out, e)| *out = e.truncate());
+    g.emission.clear();
+    match emission {
+        Some(e) => g.emission.par_extend(e.par_iter().map(|e| e.truncate())),
+        None => g.emission.resize(packed.len(), Vec3::ZERO),
+    }
 }

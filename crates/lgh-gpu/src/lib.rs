@@ -71,8 +71,9 @@ macro_rules! gpu_frame_passes {
             camera: &lgh_scene::camera::CameraFrame,
             size: (u32, u32),
             g: &mut lgh_render::passes::gbuffer::GBuffer,
+            keep_on_device: bool,
         ) -> Result<bool, lgh_render::settings::RenderError> {
-            crate::primary::method_gbuffer(world, camera, size, g)
+            crate::primary::method_gbuffer(world, camera, size, g, keep_on_device)
         }
 
         fn generate_vpls(

@@ -289,3 +289,95 @@ fn the_temporal_filter_on_the_gpu_is_the_cpus() {
         assert!(changed > 0.1, "{scene:?}: the filter changed {changed}");
     }
 }
+
+/// `count` dim point lights in a row across the middle of `world`'s upper half.
+fn row_of_lights(world: &lgh_render::World, count: usize) -> Vec<lgh_scene::light::Light> {
+    let r = world.radius;
+    (0..count)
+        .map(|i| lgh_scene::light::Light::Point {
+            position: world.centre
+                + Vec3::new(0.4 * r * (i as f32 / count as f32 - 0.5), 0.3 * r, 0.0),
+            intensity: Vec3::splat(r * r / count as f32),
+        })
+        .collect()
+}
+
+/// A moving camera's frames shown on the GPU (the viewer's `--device gpu`) leave the
+/// G-buffer's planes on the GPU: the default frame reads back its packed pixels (4 bytes a
+/// pixel), the list of its edge pixels (16 bytes each; here, small, a third of the pixels)
+/// and a few words, under 12 bytes a pixel where the planes alone are 80 (64 packed, and
+/// 16 of emission), and shows exactly what the
+/// same frame shows from planes traced and read back first. So do the frames whose steps
+/// fall back to the CPU: one level shown alone (the grids on the CPU; the planes stay), an
+/// interleaving blur wider than the GPU's (the ratio filter on the CPU) and 65 point
+/// lights (the direct light on the CPU), which read the planes back.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn moving_frames_shown_on_the_gpu_leave_the_planes_there() {
+    use lgh_gpu::batch::read_back_bytes;
+    let ctx = GpuContext::shared().expect("an adapter");
+    // Whether the frame reads the planes back: no, yes, or left open (one level alone reads
+    // back VPLs and grids, not planes).
+    let cases: [(&str, Change, Option<bool>); 4] = [
+        ("viewer", |_| {}, Some(false)),
+        ("one level", |s| s.lgh.only_level = Some(2), None),
+        ("wide blur", |s| s.tiling.blur.radius = 24, Some(true)),
+        ("65 lights", |_| {}, Some(true)),
+    ];
+    for (what, change, planes_back) in cases {
+        let mut world = common::world(None);
+        let rest = world.scene.camera();
+        let mut lights = world.scene.lights.clone();
+        if what == "65 lights" {
+            lights = row_of_lights(&world, 65);
+        }
+        let mut s = viewer_settings();
+        change(&mut s);
+        let (w, h) = (s.width, s.height);
+        let (mut lazy, mut eager) = (
+            lgh_render::FrameMemory::default(),
+            lgh_render::FrameMemory::default(),
+        );
+        for frame in 0..2u32 {
+            let mut camera = rest.clone();
+            let turn = glam::Quat::from_rotation_y(0.02 * frame as f32);
+            camera.look_at = camera.position + turn * (camera.look_at - camera.position);
+            world.set_view(camera, lights.clone());
+            let request = DisplayRequest {
+                exposure: world.scene.exposure,
+                restart: true,
+                linear: false,
+                taa: None,
+            };
+            let before = read_back_bytes();
+            let mut got =
+                render_frame_shown(&world, &s, &Silent, &mut lazy, request).expect("shown");
+            let bytes = read_back_bytes() - before;
+            let n = (w * h) as u64;
+            assert!(got.gbuffer.planes_deferred(), "{what}: planes read back");
+            match planes_back {
+                Some(false) => assert!(bytes < 12 * n, "{what}: {bytes} bytes, {n} pixels"),
+                Some(true) => assert!(bytes > 64 * n, "{what}: no fallback ({bytes} bytes)"),
+                None => {}
+            }
+            let mut g = GBuffer::default();
+            let view = world.scene.camera().frame(w, h);
+            lgh_gpu::primary::trace_gbuffer(ctx, &world, &view, w, h, &mut g).expect("traced");
+            eager.recycle_gbuffer(g);
+            let mut want =
+                render_frame_shown(&world, &s, &Silent, &mut eager, request).expect("shown");
+            assert!(!want.gbuffer.planes_deferred());
+            let (a, b) = (got.shown.take(), want.shown.take());
+            let (a, b) = (a.expect("shown"), b.expect("shown"));
+            assert!(
+                a.pixels.iter().any(|&p| p & 0xff_ffff != 0),
+                "{what}: black"
+            );
+            assert!(a.pixels == b.pixels, "{what}, frame {frame}: another image");
+            lazy.recycle_gbuffer(got.gbuffer);
+        }
+    }
+}

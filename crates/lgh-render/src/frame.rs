@@ -169,22 +169,30 @@ fn recipe(
     let camera = world.scene.camera().frame(w, h).with_jitter(s.jitter);
     // A piece of a frame shades its rectangle and the guard band its filters reach.
     let keep = crate::region::shaded_rect(s);
-    let g = t.time("gbuffer", || {
+    let all_reflected = s.method.illumination() == Illumination::AllReflected;
+    // A frame its method's backend may show (`show`) leaves the G-buffer's planes on that
+    // backend's device until a pass here reads them: a moving camera's frame then moves
+    // no planes (80 bytes a pixel) across.
+    let may_show =
+        request.is_some() && keep.is_none() && !all_reflected && s.component != Component::Direct;
+    let mut g = t.time("gbuffer", || {
         let mut g = memory.gbuffer.take().unwrap_or_default();
         if !g.shows(world, &camera, w, h)
             && !s
                 .method
                 .get()
-                .trace_gbuffer(world, &camera, (w, h), &mut g)?
+                .trace_gbuffer(world, &camera, (w, h), &mut g, may_show)?
         {
             g.render_into(world, &camera, w, h);
+        }
+        if !may_show {
+            g.read_deferred()?;
         }
         if let Some(r) = &keep {
             g.clear_outside(r);
         }
         Ok::<_, RenderError>(g)
     })?;
-    let all_reflected = s.method.illumination() == Illumination::AllReflected;
     let vpls = if all_reflected {
         VplSet::default()
     } else {
@@ -195,12 +203,14 @@ fn recipe(
             })
         })?
     };
-    if let Some(request) = request.filter(|_| !all_reflected && s.component != Component::Direct) {
+    if let Some(request) = request.filter(|_| may_show) {
         let shown = show(world, s, progress, memory, &camera, &g, &vpls, request);
         if let Some((out, displayed, shown_t)) = shown? {
             t.0.extend(shown_t.0);
             return Ok(shown_frame(s, start, t, g, vpls, out, displayed, camera));
         }
+        // Not shown there: the passes here read the planes.
+        t.time("gbuffer_read_back", || g.read_deferred())?;
     }
     // The indirect component alone does not need the direct pass (about a third of a
     // 1280x720 frame), and a path tracer computes it itself.
@@ -317,9 +327,9 @@ fn find_edges<'m>(
     keep: Option<&Region>,
     cache: &'m mut ViewCache<EdgeResolve>,
 ) -> Result<Resolve<'m>, RenderError> {
-    let make = || EdgeResolve::new(world, camera, g, s.edge_samples, keep);
     if keep.is_some() {
-        return Ok(Resolve::Made(make()));
+        let made = EdgeResolve::new(world, camera, g.planes()?, s.edge_samples, keep);
+        return Ok(Resolve::Made(made));
     }
     let params = [s.edge_samples, 0, 0, 0];
     if !cache.holds(g, params) {
@@ -333,6 +343,13 @@ fn find_edges<'m>(
             None => {}
         }
     }
+    // Made here: from the planes, read back if the backend kept them.
+    let planes = if cache.holds(g, params) {
+        g
+    } else {
+        g.planes()?
+    };
+    let make = || EdgeResolve::new(world, camera, planes, s.edge_samples, None);
     Ok(Resolve::Kept(cache.get_or_insert_with(g, params, make)))
 }
 

@@ -118,11 +118,14 @@ impl IndirectMethod for GpuLgh {
             return Ok(None);
         }
         // The direct light where the GPU's pass does not run the scene, on the CPU.
-        let host_direct = (show.direct && !crate::direct::supported(world, s)).then(|| {
+        let host_direct = if show.direct && !crate::direct::supported(world, s) {
             let (seed, samples, mode) = (s.seed, s.area_samples, s.direct);
             let filter = &mut memory.direct_filter;
-            render_direct(world, g, seed, samples, mode, filter, inputs.progress).radiance
-        });
+            let g = g.planes()?;
+            Some(render_direct(world, g, seed, samples, mode, filter, inputs.progress).radiance)
+        } else {
+            None
+        };
         let shown = Shown {
             inputs: show,
             host_direct: host_direct.as_deref(),
@@ -215,6 +218,15 @@ impl GpuLgh {
     }
 }
 
+/// `inputs` with the G-buffer's planes on the CPU ([`GBuffer::planes`]: read back where
+/// the GPU kept them), for the steps that fall back to the CPU.
+fn planes_on_cpu<'a>(inputs: &MethodInputs<'a>) -> Result<MethodInputs<'a>, RenderError> {
+    Ok(MethodInputs {
+        gbuffer: inputs.gbuffer.planes()?,
+        ..*inputs
+    })
+}
+
 /// Why a GPU lgh frame did not come out.
 enum Attempt {
     /// It needs its grids on the CPU: make it again with them read back.
@@ -240,6 +252,14 @@ fn frame(
     shown: Option<&Shown<'_>>,
 ) -> Result<(MethodOutput, Option<Displayed>), Attempt> {
     let fail = |e: GpuError| RenderError::Backend(e.to_string());
+    // A frame that comes back is composed on the CPU, from the planes.
+    let on_cpu;
+    let inputs = if shown.is_none() {
+        on_cpu = planes_on_cpu(inputs)?;
+        &on_cpu
+    } else {
+        inputs
+    };
     // The hierarchies built on the GPU (the gather construction on the CPU).
     // Their representatives and the VPLs these index stay on the GPU for the loop.
     let mut builder = crate::grid::GpuGridBuilder::new(ctx);
@@ -282,7 +302,7 @@ fn frame(
         Ok(bins) => Some(bins),
         Err(GpuError::TooLarge(_)) if !frame.lights_on_cpu() => return Err(Attempt::Again),
         Err(GpuError::TooLarge(_)) => {
-            frame.bin_on_cpu(inputs, memory);
+            frame.bin_on_cpu(&planes_on_cpu(inputs)?, memory);
             table = None;
             None
         }
@@ -315,7 +335,7 @@ fn frame(
         });
     }
     let shaded = lighting_loop(ctx, inputs, &tables, held).map_err(fail)?;
-    let out = frame.finish_with(inputs, shaded, memory, Some(gpu_atrous));
+    let out = frame.finish_with(&planes_on_cpu(inputs)?, shaded, memory, Some(gpu_atrous));
     Ok((out, None))
 }
 

@@ -243,10 +243,14 @@ pub trait IndirectMethod: Sync + Send {
     ) -> Result<Option<(MethodOutput, crate::display::Displayed)>, RenderError> {
         Ok(None)
     }
+
     /// Traces the frame's primary rays into `g` (`world` seen by `camera` at `width` x
     /// `height`, every plane and [`GBuffer::view`] set as [`GBuffer::render_into`] sets
     /// them) on this method's own backend and returns `Ok(true)`, or returns `Ok(false)`,
-    /// the default, for the CPU's pass. lgh-gpu's methods trace them on the GPU.
+    /// the default, for the CPU's pass. lgh-gpu's methods trace them on the GPU. Where
+    /// `keep_on_device` (a frame the backend may show itself, whose caller reads the planes
+    /// through [`GBuffer::planes`] or [`GBuffer::read_deferred`]), the backend may leave
+    /// the planes on its device ([`GBuffer::defer_planes`]).
     ///
     /// # Errors
     /// The backend failed.
@@ -256,6 +260,7 @@ pub trait IndirectMethod: Sync + Send {
         _camera: &CameraFrame,
         _size: (u32, u32),
         _g: &mut GBuffer,
+        _keep_on_device: bool,
     ) -> Result<bool, RenderError> {
         Ok(false)
     }

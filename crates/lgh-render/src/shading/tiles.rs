@@ -597,6 +597,7 @@ mod tests {
             depth: vec![1.0; n_px],
             emission: vec![Vec3::ZERO; n_px],
             view: None,
+            deferred: Default::default(),
         };
         let camera = Camera {
             position: Vec3::new(0.0, 0.0, 5.0),

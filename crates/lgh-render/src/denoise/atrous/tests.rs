@@ -89,6 +89,7 @@ fn random_input(seed: u64, w: u32) -> (GBuffer, Vec<Vec3>, Vec<Vec3>) {
         depth,
         emission: vec![Vec3::ZERO; n],
         view: None,
+        deferred: Default::default(),
     };
     (g, s, u)
 }
@@ -159,6 +160,7 @@ fn the_unshadowed_weight_keeps_the_ratio_where_a_changes() {
         depth: vec![1.0; n],
         emission: vec![Vec3::ZERO; n],
         view: None,
+        deferred: Default::default(),
     };
     // Mean |ratio - true ratio| over the 4 columns each side of the boundary.
     let error = |a_phi: f32| {

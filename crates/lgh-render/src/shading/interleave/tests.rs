@@ -40,6 +40,7 @@ fn two_planes(w: u32, h: u32, split: u32) -> GBuffer {
         depth,
         emission: vec![Vec3::ZERO; n],
         view: None,
+        deferred: Default::default(),
     }
 }
 
