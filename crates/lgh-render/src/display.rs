@@ -67,9 +67,22 @@ pub struct ShowInputs<'a> {
     pub emission: bool,
     /// The resolve of the frame's edges, applied to the composed image (it is linear, so
     /// this equals resolving each part).
-    pub edges: Option<&'a EdgeResolve>,
+    pub edges: ShowEdges<'a>,
     /// The display asked for.
     pub request: DisplayRequest,
+}
+
+/// The edge resolve of a frame shown by its backend ([`ShowInputs::edges`]).
+#[derive(Clone, Copy, Debug)]
+pub enum ShowEdges<'a> {
+    /// No resolve (one sample a pixel).
+    None,
+    /// This resolve, found before (and kept while the view stands still).
+    Resolved(&'a EdgeResolve),
+    /// Found by the backend itself with this many sub-pixel samples an edge pixel, in the
+    /// frame's own work (a moving camera's frame: no resolve is kept for its view). A
+    /// backend finds the same edge pixels and counts as `EdgeResolve::new`'s.
+    Find(u32),
 }
 
 /// One linear pixel tone-mapped with `exposure` and packed as `0x00RRGGBB`.

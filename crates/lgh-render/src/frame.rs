@@ -24,7 +24,7 @@ use lgh_scene::camera::CameraFrame;
 use rayon::prelude::*;
 
 use crate::direct::render_direct;
-use crate::display::{DisplayRequest, Displayed, ShowInputs};
+use crate::display::{DisplayRequest, Displayed, ShowEdges, ShowInputs};
 use crate::image::Image;
 use crate::memory::{FrameMemory, ViewCache};
 use crate::methods::{Illumination, MethodInputs, MethodOutput, MethodStats};
@@ -175,9 +175,10 @@ fn recipe(
     // no planes (80 bytes a pixel) across.
     let may_show =
         request.is_some() && keep.is_none() && !all_reflected && s.component != Component::Direct;
-    let mut g = t.time("gbuffer", || {
+    let (mut g, still) = t.time("gbuffer", || {
         let mut g = memory.gbuffer.take().unwrap_or_default();
-        if !g.shows(world, &camera, w, h)
+        let still = g.shows(world, &camera, w, h);
+        if !still
             && !s
                 .method
                 .get()
@@ -191,7 +192,7 @@ fn recipe(
         if let Some(r) = &keep {
             g.clear_outside(r);
         }
-        Ok::<_, RenderError>(g)
+        Ok::<_, RenderError>((g, still))
     })?;
     let vpls = if all_reflected {
         VplSet::default()
@@ -204,7 +205,12 @@ fn recipe(
         })?
     };
     if let Some(request) = request.filter(|_| may_show) {
-        let shown = show(world, s, progress, memory, &camera, &g, &vpls, request);
+        let view = View {
+            camera: &camera,
+            g: &g,
+            still,
+        };
+        let shown = show(world, s, progress, memory, &view, &vpls, request);
         if let Some((out, displayed, shown_t)) = shown? {
             t.0.extend(shown_t.0);
             return Ok(shown_frame(s, start, t, g, vpls, out, displayed, camera));
@@ -353,26 +359,36 @@ fn find_edges<'m>(
     Ok(Resolve::Kept(cache.get_or_insert_with(g, params, make)))
 }
 
+/// The view of a frame: its camera and G-buffer, and whether the G-buffer is the last
+/// frame's (the camera stood still).
+struct View<'a> {
+    camera: &'a CameraFrame,
+    g: &'a GBuffer,
+    still: bool,
+}
+
 /// The frame's direct and indirect light rendered and shown by the method's backend
 /// ([`crate::methods::IndirectMethod::render_shown`]), with the edges resolved there;
-/// `None` where the backend does not show frames. The timings: `edge_aa` (finding the
-/// edges) and `indirect` (all the rest), with the method's own.
-#[allow(clippy::too_many_arguments)]
+/// `None` where the backend does not show frames. The edges of a still view are found
+/// here and kept; a moving view's are found by the backend in the frame's own work
+/// ([`ShowEdges::Find`]). The timings: `edge_aa` (finding the edges here) and `indirect`
+/// (all the rest), with the method's own.
 fn show(
     world: &World,
     s: &RenderSettings,
     progress: &dyn Progress,
     memory: &mut FrameMemory,
-    camera: &CameraFrame,
-    g: &GBuffer,
+    view: &View,
     vpls: &VplSet,
     request: DisplayRequest,
 ) -> Result<Option<(MethodOutput, Displayed, Timings)>, RenderError> {
+    let View { camera, g, still } = *view;
     let mut t = Timings::default();
     // The method gets `memory` while the edges borrow its cache: the cache is taken out for
     // the frame and put back after it.
     let mut cache = std::mem::take(&mut memory.edge_resolve);
-    let edges = if s.edge_samples > 1 {
+    let kept = still || cache.holds(g, [s.edge_samples, 0, 0, 0]);
+    let edges = if s.edge_samples > 1 && kept {
         Some(t.time("edge_aa", || {
             find_edges(world, camera, g, s, None, &mut cache)
         })?)
@@ -384,7 +400,11 @@ fn show(
     let show = ShowInputs {
         direct: all,
         emission: all,
-        edges: edges.as_ref().map(Resolve::get),
+        edges: match &edges {
+            Some(r) => ShowEdges::Resolved(r.get()),
+            None if s.edge_samples > 1 => ShowEdges::Find(s.edge_samples),
+            None => ShowEdges::None,
+        },
         request,
     };
     let shown = t.time("indirect", || {

@@ -15,9 +15,10 @@ use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::ThreadId;
 
 use glam::{Vec3, Vec4};
-use lgh_render::display::{DisplayRequest, Displayed, ShowInputs};
+use lgh_render::display::{DisplayRequest, Displayed, ShowEdges, ShowInputs};
 use lgh_render::methods::{MethodInputs, MethodOutput};
 use lgh_render::passes::edge_aa::EdgeResolve;
+use lgh_render::passes::edge_aa::MAX_EDGE_SAMPLES;
 use lgh_render::passes::gbuffer::GBuffer;
 
 use crate::batch::{Batch, PassTimes, Words};
@@ -41,6 +42,18 @@ pub(crate) enum Part<'a, 'c> {
     Ratio(&'a Lease<'c>),
     /// A alone on the GPU (the first of three vec4s a pixel): albedo / pi x A.
     Unshadowed(&'a Lease<'c>),
+}
+
+/// The edge resolve a shown frame applies.
+pub(crate) enum Edges<'a, 'c> {
+    /// None.
+    None,
+    /// Found before (on the CPU, or on the GPU and read back), in pixel order.
+    Resolved(&'a EdgeResolve),
+    /// Found on the GPU in the frame's work ([`crate::edges::record`]) with this many
+    /// samples: its list in the scheduler's order (each edge pixel writes only itself, so
+    /// the order does not matter) and its count stay there.
+    Found(crate::edges::Found<'c>, u32),
 }
 
 /// `Params` of `display_compose.wgsl`.
@@ -168,7 +181,7 @@ pub(crate) fn record<'c>(
     g: &GBuffer,
     gbuffer: &Arc<GpuGBuffer>,
     parts: &Parts<'_, 'c>,
-    edges: Option<&EdgeResolve>,
+    edges: Edges<'_, 'c>,
     request: &DisplayRequest,
 ) -> Result<Recorded, GpuError> {
     let n = g.len();
@@ -231,8 +244,15 @@ pub(crate) fn record<'c>(
     resources.push(image.binding());
     let bind = ctx.bind_group(&pipeline, resources);
     batch.dispatch("show", &pipeline, &bind, n)?;
-    if let Some(edges) = edges.filter(|e| e.edge_pixels() > 0 && e.size() == (g.width, g.height)) {
-        record_edges(ctx, batch, &image, edges)?;
+    match edges {
+        Edges::Resolved(e) if e.edge_pixels() > 0 && e.size() == (g.width, g.height) => {
+            record_edges(ctx, batch, &image, EdgeList::Cpu(e), (g.width, g.height))?;
+        }
+        Edges::Found(found, samples) => {
+            let list = EdgeList::Gpu(found, samples);
+            record_edges(ctx, batch, &image, list, (g.width, g.height))?;
+        }
+        Edges::Resolved(_) | Edges::None => {}
     }
     let (sum, restart, frames) = running_sum(ctx, n, request.restart);
     let show = ctx.uniform(
@@ -272,39 +292,65 @@ pub(crate) fn record<'c>(
     })
 }
 
-/// Records the edge resolve of `edges` over `image`.
+/// An edge list to apply: on the CPU (uploaded), or found on the GPU with its samples.
+enum EdgeList<'a, 'c> {
+    Cpu(&'a EdgeResolve),
+    Gpu(crate::edges::Found<'c>, u32),
+}
+
+/// Records the edge resolve of `edges` over the `width` x `height` `image`. A list found
+/// on the GPU is applied over as many entries as the image has pixels, each invocation
+/// past the list's count (read on the GPU) doing nothing.
 fn record_edges<'c>(
     ctx: &'c GpuContext,
     batch: &mut Batch<'c>,
     image: &Lease<'c>,
-    edges: &EdgeResolve,
+    edges: EdgeList<'_, 'c>,
+    (width, height): (u32, u32),
 ) -> Result<(), GpuError> {
-    let rows: Vec<[u32; 4]> = edges
-        .edges()
-        .iter()
-        .map(|&(p, c)| {
-            let word = |k: usize| {
-                (0..4).fold(0u32, |w, j| {
-                    w | (u32::from(c.get(4 * k + j).copied().unwrap_or(0)) << (8 * j))
+    let (list, count, entries, samples) = match edges {
+        EdgeList::Cpu(edges) => {
+            let rows: Vec<[u32; 4]> = edges
+                .edges()
+                .iter()
+                .map(|&(p, c)| {
+                    let word = |k: usize| {
+                        (0..4).fold(0u32, |w, j| {
+                            w | (u32::from(c.get(4 * k + j).copied().unwrap_or(0)) << (8 * j))
+                        })
+                    };
+                    [p, word(0), word(1), word(2)]
                 })
-            };
-            [p, word(0), word(1), word(2)]
-        })
-        .collect();
-    let count = rows.len();
-    let list = ctx.upload("edge pixels", &rows)?;
-    let resolved = ctx.output("resolved edges", 16 * count as u64)?;
-    let (width, height) = edges.size();
+                .collect();
+            let count = ctx.upload("edge count", &[rows.len() as u32, 0, 0, 0])?;
+            (
+                ctx.upload("edge pixels", &rows)?,
+                count,
+                rows.len(),
+                edges.samples(),
+            )
+        }
+        EdgeList::Gpu(found, samples) => {
+            let n = width as usize * height as usize;
+            (
+                found.list,
+                found.count,
+                n,
+                samples.clamp(1, MAX_EDGE_SAMPLES),
+            )
+        }
+    };
+    let resolved = ctx.output("resolved edges", (16 * entries as u64).max(16))?;
     let pipeline = ctx.pipeline("display_edges", edges_source);
     for mode in 0..2 {
         let params = ctx.uniform(
             "display edges",
             &EdgeParams {
-                edges: count as u32,
+                edges: entries as u32,
                 width,
                 height,
                 mode,
-                inv_samples: 1.0 / edges.samples() as f32,
+                inv_samples: 1.0 / samples as f32,
                 _p: [0; 3],
             },
         );
@@ -315,11 +361,13 @@ fn record_edges<'c>(
                 list.binding(),
                 image.binding(),
                 resolved.binding(),
+                count.binding(),
             ],
         );
-        batch.dispatch("show", &pipeline, &bind, count)?;
+        batch.dispatch("show", &pipeline, &bind, entries)?;
     }
     batch.keep(list);
+    batch.keep(count);
     batch.keep(resolved);
     Ok(())
 }
@@ -451,7 +499,15 @@ pub(crate) fn record_frame<'c>(
         direct,
         indirect,
     };
-    let edges = shown.inputs.edges;
+    let edges = match shown.inputs.edges {
+        ShowEdges::None => Edges::None,
+        ShowEdges::Resolved(e) => Edges::Resolved(e),
+        ShowEdges::Find(samples) => {
+            let (camera, size) = (inputs.camera, (g.width, g.height));
+            let found = crate::edges::record(ctx, batch, world, camera, gbuffer, size, samples)?;
+            Edges::Found(found, samples)
+        }
+    };
     let recorded = record(ctx, batch, g, gbuffer, &parts, edges, &shown.inputs.request)?;
     if let Some(lease) = lease {
         batch.keep(lease);
@@ -522,6 +578,7 @@ pub fn show_parts(
         indirect: host_part(indirect),
     };
     let mut batch = Batch::new(ctx);
+    let edges = edges.map_or(Edges::None, Edges::Resolved);
     let recorded = record(ctx, &mut batch, g, &gbuffer, &parts, edges, request)?;
     let (reads, _) = batch.finish()?;
     Ok(recorded.finish(&reads))

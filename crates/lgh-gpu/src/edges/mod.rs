@@ -14,6 +14,8 @@ use lgh_scene::camera::CameraFrame;
 
 use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
+use crate::gbuffer::GpuGBuffer;
+use crate::pool::Lease;
 use crate::primary::GpuCamera;
 
 /// `Params` of `shaders/edges.wgsl`.
@@ -54,34 +56,9 @@ pub fn edge_resolve(
         return Ok(EdgeResolve::from_edges(w, h, samples, Vec::new()));
     }
     let n = g.len();
-    let scene = ctx.scene(world)?;
-    let surfaces = scene.surfaces(ctx, world)?;
     let gbuffer = ctx.gbuffer(g)?;
-    let mut offsets = [[0.0f32; 4]; MAX_EDGE_SAMPLES as usize / 2];
-    for s in 0..samples {
-        let o: Vec2 = subpixel_jitter(s);
-        let pair = &mut offsets[s as usize / 2];
-        pair[2 * (s as usize % 2)] = o.x;
-        pair[2 * (s as usize % 2) + 1] = o.y;
-    }
-    let params = ctx.uniform(
-        "edge params",
-        &Params {
-            camera: GpuCamera::new(camera, w, h),
-            samples,
-            pad: [0; 3],
-            offsets,
-        },
-    );
-    let list = ctx.output("edge pixels", 16 * n as u64)?;
-    let count = ctx.output("edge count", 16)?;
-    let pipeline = ctx.pipeline("edges", source);
-    let mut resources = surfaces.bindings(&params, &scene);
-    resources.extend([gbuffer.binding(), list.binding(), count.binding()]);
-    let bind = ctx.bind_group(&pipeline, resources);
     let mut batch = Batch::new(ctx);
-    batch.clear_lease(&count);
-    batch.dispatch("edge samples", &pipeline, &bind, n)?;
+    let Found { list, count } = record(ctx, &mut batch, world, camera, &gbuffer, (w, h), samples)?;
     batch.read(count.buffer(), 4)?;
     let (reads, _) = batch.finish()?;
     let edges = reads
@@ -103,6 +80,60 @@ pub fn edge_resolve(
         })
         .collect();
     Ok(EdgeResolve::from_edges(w, h, samples, list))
+}
+
+/// The edge pixels a frame found on the GPU ([`record`]): per edge pixel its index and its
+/// nine counts, a byte each, four to a word (`display_edges.wgsl` reads them so), in the
+/// scheduler's order; and their number (one word).
+pub(crate) struct Found<'c> {
+    pub list: Lease<'c>,
+    pub count: Lease<'c>,
+}
+
+/// Records into `batch` the search for the edge pixels of the `width` x `height` G-buffer
+/// `gbuffer` seen through `camera`, with `samples` (2 to [`MAX_EDGE_SAMPLES`]) sub-pixel
+/// samples each: the list and count stay on the GPU.
+///
+/// # Errors
+/// The scene or the frame does not fit the adapter's limits.
+pub(crate) fn record<'c>(
+    ctx: &'c GpuContext,
+    batch: &mut Batch<'c>,
+    world: &World,
+    camera: &CameraFrame,
+    gbuffer: &GpuGBuffer,
+    (w, h): (u32, u32),
+    samples: u32,
+) -> Result<Found<'c>, GpuError> {
+    let samples = samples.clamp(1, MAX_EDGE_SAMPLES);
+    let n = w as usize * h as usize;
+    let scene = ctx.scene(world)?;
+    let surfaces = scene.surfaces(ctx, world)?;
+    let mut offsets = [[0.0f32; 4]; MAX_EDGE_SAMPLES as usize / 2];
+    for s in 0..samples {
+        let o: Vec2 = subpixel_jitter(s);
+        let pair = &mut offsets[s as usize / 2];
+        pair[2 * (s as usize % 2)] = o.x;
+        pair[2 * (s as usize % 2) + 1] = o.y;
+    }
+    let params = ctx.uniform(
+        "edge params",
+        &Params {
+            camera: GpuCamera::new(camera, w, h),
+            samples,
+            pad: [0; 3],
+            offsets,
+        },
+    );
+    let list = ctx.output("edge pixels", (16 * n as u64).max(16))?;
+    let count = ctx.output("edge count", 16)?;
+    let pipeline = ctx.pipeline("edges", source);
+    let mut resources = surfaces.bindings(&params, &scene);
+    resources.extend([gbuffer.binding(), list.binding(), count.binding()]);
+    let bind = ctx.bind_group(&pipeline, resources);
+    batch.clear_lease(&count);
+    batch.dispatch("edge samples", &pipeline, &bind, n)?;
+    Ok(Found { list, count })
 }
 
 /// [`edge_resolve`] for a GPU method's

@@ -106,7 +106,7 @@ pub fn trace_gbuffer_on_device(
         return Err(GpuError::Failed("the traced G-buffer is missing".into()));
     };
     let view = (world.geometry_id(), *camera);
-    let reader = std::sync::Arc::new(crate::gbuffer::OnDevice { ctx, gbuffer });
+    let reader = Arc::new(crate::gbuffer::OnDevice { ctx, gbuffer });
     g.defer_planes((width, height), view, reader);
     Ok(())
 }
@@ -164,8 +164,9 @@ fn trace(
 }
 
 /// [`trace_gbuffer`] (or where `keep_on_device`, [`trace_gbuffer_on_device`]) for a GPU
-/// method's [`lgh_render::methods::IndirectMethod::trace_gbuffer`] on the process's context: `Ok(false)` (the CPU traces them) where the scene's surfaces
-/// or the image do not fit the adapter's buffers.
+/// method's [`lgh_render::methods::IndirectMethod::trace_gbuffer`] on the process's
+/// context: `Ok(false)` (the CPU traces them) where the scene's surfaces or the image do
+/// not fit the adapter's buffers.
 ///
 /// # Errors
 /// No adapter, or the GPU failed.

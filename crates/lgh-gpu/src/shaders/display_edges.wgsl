@@ -20,11 +20,14 @@ struct Params {
 @group(0) @binding(1) var<storage, read> edges: array<vec4<u32>>;
 @group(0) @binding(2) var<storage, read_write> image: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> resolved: array<vec4<f32>>;
+// The number of edge pixels in the list (its first word): `params.edges` bounds the
+// dispatch, which for a list found on the GPU is the image's pixels.
+@group(0) @binding(4) var<storage, read> edge_count: array<u32>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let e = id.x;
-    if (e >= params.edges) {
+    if (e >= min(params.edges, edge_count[0])) {
         return;
     }
     let edge = edges[e];
