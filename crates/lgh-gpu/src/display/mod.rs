@@ -17,8 +17,7 @@ use std::thread::ThreadId;
 use glam::{Vec3, Vec4};
 use lgh_render::display::{DisplayRequest, Displayed, ShowEdges, ShowInputs};
 use lgh_render::methods::{MethodInputs, MethodOutput};
-use lgh_render::passes::edge_aa::EdgeResolve;
-use lgh_render::passes::edge_aa::MAX_EDGE_SAMPLES;
+use lgh_render::passes::edge_aa::{EdgeResolve, MAX_EDGE_SAMPLES};
 use lgh_render::passes::gbuffer::GBuffer;
 
 use crate::batch::{Batch, PassTimes, Words};
@@ -244,16 +243,7 @@ pub(crate) fn record<'c>(
     resources.push(image.binding());
     let bind = ctx.bind_group(&pipeline, resources);
     batch.dispatch("show", &pipeline, &bind, n)?;
-    match edges {
-        Edges::Resolved(e) if e.edge_pixels() > 0 && e.size() == (g.width, g.height) => {
-            record_edges(ctx, batch, &image, EdgeList::Cpu(e), (g.width, g.height))?;
-        }
-        Edges::Found(found, samples) => {
-            let list = EdgeList::Gpu(found, samples);
-            record_edges(ctx, batch, &image, list, (g.width, g.height))?;
-        }
-        Edges::Resolved(_) | Edges::None => {}
-    }
+    record_edges(ctx, batch, &image, edges, (g.width, g.height))?;
     let (sum, restart, frames) = running_sum(ctx, n, request.restart);
     let show = ctx.uniform(
         "display show",
@@ -292,24 +282,19 @@ pub(crate) fn record<'c>(
     })
 }
 
-/// An edge list to apply: on the CPU (uploaded), or found on the GPU with its samples.
-enum EdgeList<'a, 'c> {
-    Cpu(&'a EdgeResolve),
-    Gpu(crate::edges::Found<'c>, u32),
-}
-
-/// Records the edge resolve of `edges` over the `width` x `height` `image`. A list found
+/// Records the edge resolve of `edges` over the `width` x `height` `image` (nothing for
+/// none, or for a resolve found before that is empty or of another size). A list found
 /// on the GPU is applied over as many entries as the image has pixels, each invocation
 /// past the list's count (read on the GPU) doing nothing.
 fn record_edges<'c>(
     ctx: &'c GpuContext,
     batch: &mut Batch<'c>,
     image: &Lease<'c>,
-    edges: EdgeList<'_, 'c>,
+    edges: Edges<'_, 'c>,
     (width, height): (u32, u32),
 ) -> Result<(), GpuError> {
     let (list, count, entries, samples) = match edges {
-        EdgeList::Cpu(edges) => {
+        Edges::Resolved(edges) if edges.edge_pixels() > 0 && edges.size() == (width, height) => {
             let rows: Vec<[u32; 4]> = edges
                 .edges()
                 .iter()
@@ -330,7 +315,7 @@ fn record_edges<'c>(
                 edges.samples(),
             )
         }
-        EdgeList::Gpu(found, samples) => {
+        Edges::Found(found, samples) => {
             let n = width as usize * height as usize;
             (
                 found.list,
@@ -339,6 +324,7 @@ fn record_edges<'c>(
                 samples.clamp(1, MAX_EDGE_SAMPLES),
             )
         }
+        Edges::Resolved(_) | Edges::None => return Ok(()),
     };
     let resolved = ctx.output("resolved edges", (16 * entries as u64).max(16))?;
     let pipeline = ctx.pipeline("display_edges", edges_source);
