@@ -17,7 +17,7 @@ use std::thread::ThreadId;
 use glam::{Vec3, Vec4};
 use lgh_render::display::{DisplayRequest, Displayed, ShowEdges, ShowInputs};
 use lgh_render::methods::{MethodInputs, MethodOutput};
-use lgh_render::passes::edge_aa::{EdgeResolve, MAX_EDGE_SAMPLES};
+use lgh_render::passes::edge_aa::EdgeResolve;
 use lgh_render::passes::gbuffer::GBuffer;
 
 use crate::batch::{Batch, PassTimes, Words};
@@ -49,10 +49,10 @@ pub(crate) enum Edges<'a, 'c> {
     None,
     /// Found before (on the CPU, or on the GPU and read back), in pixel order.
     Resolved(&'a EdgeResolve),
-    /// Found on the GPU in the frame's work ([`crate::edges::record`]) with this many
-    /// samples: its list in the scheduler's order (each edge pixel writes only itself, so
-    /// the order does not matter) and its count stay there.
-    Found(crate::edges::Found<'c>, u32),
+    /// Found on the GPU in the frame's work ([`crate::edges::record`]): its list in the
+    /// scheduler's order (each edge pixel writes only itself, so the order does not
+    /// matter) and its count stay there.
+    Found(crate::edges::Found<'c>),
 }
 
 /// `Params` of `display_compose.wgsl`.
@@ -315,14 +315,9 @@ fn record_edges<'c>(
                 edges.samples(),
             )
         }
-        Edges::Found(found, samples) => {
+        Edges::Found(found) => {
             let n = width as usize * height as usize;
-            (
-                found.list,
-                found.count,
-                n,
-                samples.clamp(1, MAX_EDGE_SAMPLES),
-            )
+            (found.list, found.count, n, found.samples)
         }
         Edges::Resolved(_) | Edges::None => return Ok(()),
     };
@@ -490,8 +485,9 @@ pub(crate) fn record_frame<'c>(
         ShowEdges::Resolved(e) => Edges::Resolved(e),
         ShowEdges::Find(samples) => {
             let (camera, size) = (inputs.camera, (g.width, g.height));
-            let found = crate::edges::record(ctx, batch, world, camera, gbuffer, size, samples)?;
-            Edges::Found(found, samples)
+            Edges::Found(crate::edges::record(
+                ctx, batch, world, camera, gbuffer, size, samples,
+            )?)
         }
     };
     let recorded = record(ctx, batch, g, gbuffer, &parts, edges, &shown.inputs.request)?;

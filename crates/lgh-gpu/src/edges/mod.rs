@@ -58,7 +58,8 @@ pub fn edge_resolve(
     let n = g.len();
     let gbuffer = ctx.gbuffer(g)?;
     let mut batch = Batch::new(ctx);
-    let Found { list, count } = record(ctx, &mut batch, world, camera, &gbuffer, (w, h), samples)?;
+    let Found { list, count, .. } =
+        record(ctx, &mut batch, world, camera, &gbuffer, (w, h), samples)?;
     batch.read(count.buffer(), 4)?;
     let (reads, _) = batch.finish()?;
     let edges = reads
@@ -84,10 +85,11 @@ pub fn edge_resolve(
 
 /// The edge pixels a frame found on the GPU ([`record`]): per edge pixel its index and its
 /// nine counts, a byte each, four to a word (`display_edges.wgsl` reads them so), in the
-/// scheduler's order; and their number (one word).
+/// scheduler's order; their number (one word); and the sub-pixel samples of each.
 pub(crate) struct Found<'c> {
     pub list: Lease<'c>,
     pub count: Lease<'c>,
+    pub samples: u32,
 }
 
 /// Records into `batch` the search for the edge pixels of the `width` x `height` G-buffer
@@ -133,7 +135,11 @@ pub(crate) fn record<'c>(
     let bind = ctx.bind_group(&pipeline, resources);
     batch.clear_lease(&count);
     batch.dispatch("edge samples", &pipeline, &bind, n)?;
-    Ok(Found { list, count })
+    Ok(Found {
+        list,
+        count,
+        samples,
+    })
 }
 
 /// [`edge_resolve`] for a GPU method's
