@@ -11,6 +11,8 @@ use crate::pool::Lease;
 thread_local! {
     /// Bytes this thread's batches have copied back to the CPU ([`read_back_bytes`]).
     static READ_BACK: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+    /// Batches this thread has submitted and waited for ([`waits`]).
+    static WAITS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
 }
 
 /// The bytes that batches recorded on this thread have copied back from the GPU so far
@@ -20,6 +22,15 @@ thread_local! {
 #[must_use]
 pub fn read_back_bytes() -> u64 {
     READ_BACK.with(std::cell::Cell::get)
+}
+
+/// The batches recorded on this thread that were submitted and waited for so far
+/// ([`Batch::finish`]): each is a round trip in which the GPU drains its queue while the
+/// CPU reads back and records the next work. A frame's are the difference before and
+/// after it.
+#[must_use]
+pub fn waits() -> u64 {
+    WAITS.with(std::cell::Cell::get)
 }
 
 /// Timed passes one batch holds at most (further passes run untimed).
@@ -217,6 +228,7 @@ impl<'c> Batch<'c> {
             stamps = Some((resolved, staging, bytes));
         }
         ctx.queue.submit([self.enc.finish()]);
+        WAITS.with(|w| w.set(w.get() + 1));
         let mut maps: Vec<(&wgpu::Buffer, u64)> =
             self.reads.iter().map(|l| (l.buffer(), l.bytes())).collect();
         if let Some((_, staging, bytes)) = &stamps {

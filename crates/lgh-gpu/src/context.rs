@@ -61,6 +61,8 @@ pub struct GpuContext {
     grids: crate::grid::GridStates,
     /// The frame's VPLs kept for its hierarchy build ([`crate::vpls`]).
     resident_vpls: crate::vpls::resident::Slots,
+    /// The yields that plan the batches of VPL generation ([`crate::vpls`]).
+    vpl_yields: crate::vpls::plan::Yields,
     /// The running means and emission of shown frames ([`crate::display`]).
     display: crate::display::DisplayStates,
 }
@@ -104,6 +106,7 @@ impl GpuContext {
             gbuffers: GBufferCache::default(),
             grids: crate::grid::GridStates::default(),
             resident_vpls: crate::vpls::resident::Slots::default(),
+            vpl_yields: crate::vpls::plan::Yields::default(),
             display: crate::display::DisplayStates::default(),
         })
     }
@@ -256,6 +259,11 @@ impl GpuContext {
     /// The frame's VPLs kept for its hierarchy build.
     pub(crate) fn resident_vpls(&self) -> &crate::vpls::resident::Slots {
         &self.resident_vpls
+    }
+
+    /// The yields of the last VPL generations.
+    pub(crate) fn vpl_yields(&self) -> &crate::vpls::plan::Yields {
+        &self.vpl_yields
     }
 
     /// What shown frames keep between frames.

@@ -6,8 +6,13 @@
 // split keeps them (shaders/vpl_grid.wgsl writes them there). atomicOr does not depend on
 // the order of the atomics, so neither does the result.
 
+//
+// The number of VPLs is read from the light paths' status (shaders/vpl_compact.wgsl), so
+// that the split can be recorded in the submission that traces them, before it is known;
+// the dispatch covers `capacity` VPLs, every one the buffer can hold.
+
 struct Params {
-    count: u32,
+    capacity: u32,
     words: u32,
     _pad0: u32,
     _pad1: u32,
@@ -16,11 +21,13 @@ struct Params {
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> vpls: array<Vpl>;
 @group(0) @binding(2) var<storage, read_write> bits: array<atomic<u32>>;
+// The light paths' status: kept paths of the last batch, VPLs, kept paths in all.
+@group(0) @binding(3) var<storage, read> status: array<u32>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
-    if (i >= params.count) {
+    if (i >= min(status[1], params.capacity)) {
         return;
     }
     let b = normal_bin(vpls[i].normal.xyz);

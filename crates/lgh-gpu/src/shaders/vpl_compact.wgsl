@@ -2,13 +2,20 @@
 // paths in order up to the first one that brings the VPLs to the target): path k of the
 // batch is kept if the VPLs before it, `done` from earlier batches plus its exclusive prefix
 // sum, are fewer than the target; its VPLs go to out[done + prefix[k] + j]. The last kept
-// path writes the batch's kept paths and the VPL count after it to status (one writer).
+// path writes the batch's kept paths, the VPL count after it and the paths kept by all
+// batches so far to status (one writer; path 0 is always kept, so every batch writes it):
+// what follows the paths in the same submission (shaders/vpl_grid.wgsl) reads them there.
 
 struct Params {
     paths: u32,
     bounces: u32,
     done: u32,
     target_count: u32,
+    // The paths kept by the batches before (the number of the batch's first path).
+    first: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -36,5 +43,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (!next_kept) {
         status[0] = k + 1u;
         status[1] = base + n;
+        status[2] = params.first + k + 1u;
     }
 }

@@ -13,13 +13,18 @@
 // not depend on the order of the atomics, so neither does the result. Each workgroup
 // reduces in its own memory first, then adds its result with one atomic per word.
 
+//
+// The number of VPLs and of light paths are read from the paths' status
+// (shaders/vpl_compact.wgsl), so that the conversion can be recorded in the submission
+// that traces them, before they are known; the dispatch covers `capacity` VPLs.
+
 struct Params {
-    count: u32,
-    scale: f32,
+    capacity: u32,
     // 1: sorted by normal bin.
     bins: u32,
     // Words per bin of `bits`.
     words: u32,
+    _pad: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -31,6 +36,8 @@ struct Params {
 // shaders/vpl_bins.wgsl's bits and their exclusive prefix sum (with `bins`).
 @group(0) @binding(4) var<storage, read> bits: array<u32>;
 @group(0) @binding(5) var<storage, read> prefix: array<u32>;
+// The light paths' status: kept paths of the last batch, VPLs, kept paths in all.
+@group(0) @binding(6) var<storage, read> status: array<u32>;
 
 const BIN_WORDS: u32 = 48u;
 
@@ -58,7 +65,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_
     }
     workgroupBarrier();
     let i = id.x;
-    if (i < params.count) {
+    // One over the number of paths, as the CPU's `1.0 / paths as f32`.
+    let scale = recip_rn(max(status[2], 1u));
+    if (i < min(status[1], params.capacity)) {
         let v = vpls[i];
         var bin = 0u;
         var at = i;
@@ -69,7 +78,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_
             first = prefix[bin * params.words];
             at = prefix[w] + countOneBits(bits[w] & ((1u << (i % 32u)) - 1u));
         }
-        let f = v.flux.xyz * params.scale;
+        let f = v.flux.xyz * scale;
         let o = 9u * at;
         lights[o] = v.position.x;
         lights[o + 1u] = v.position.y;

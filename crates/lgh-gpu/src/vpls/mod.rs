@@ -11,6 +11,9 @@
 //! scheduling. The warps' `cos`, `sin` and `sqrt` are the GPU's, so a position may differ
 //! from the CPU's in its last bits, and a path that grazes an edge may take another turn.
 
+#[cfg(test)]
+mod batching;
+pub(crate) mod plan;
 pub(crate) mod resident;
 pub mod tables;
 
@@ -26,10 +29,6 @@ use crate::batch::Batch;
 use crate::context::{GpuContext, GpuError};
 use crate::pool::Lease;
 
-/// The most paths of one batch (as the CPU's).
-const MAX_BATCH: u64 = 1 << 20;
-/// The fewest.
-const MIN_BATCH: u64 = 1024;
 /// Bytes of a VPL on the GPU (three `vec4`s).
 const VPL_BYTES: u64 = 48;
 
@@ -58,16 +57,18 @@ struct CompactParams {
     bounces: u32,
     done: u32,
     target: u32,
+    first: u32,
+    pad: [u32; 3],
 }
 
 /// `Params` of `shaders/vpl_grid.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct GridInParams {
-    count: u32,
-    scale: f32,
+    capacity: u32,
     bins: u32,
     words: u32,
+    pad: u32,
 }
 
 /// The WGSL sources of the light-path kernel, the compaction, the conversion to the
@@ -86,6 +87,7 @@ pub fn sources() -> [String; 4] {
         crate::kernel(&[
             include_str!("../shaders/vpl_grid.wgsl"),
             include_str!("../shaders/normal_bin.wgsl"),
+            include_str!("../shaders/recip.wgsl"),
         ]),
         crate::kernel(&[
             include_str!("../shaders/vpl_bins.wgsl"),
@@ -128,6 +130,10 @@ pub(crate) enum Want {
 /// [`generate_vpls`] for `(target, bounces, seed)`, with the VPLs where `want` says: with
 /// [`Want::CpuAndGrid`] the VPLs in the build's layout are returned beside the set; with
 /// [`Want::Grid`] they are kept ([`resident::keep_held`]) and none is read back.
+///
+/// The batches are planned by [`plan::next_batch`]; what follows the paths (the build's
+/// layout, the bounds or the VPLs read back) goes into the submission of the batch
+/// expected to be the last, so that a frame whose yield is known waits once.
 fn generate<'c>(
     ctx: &'c GpuContext,
     world: &World,
@@ -145,34 +151,39 @@ fn generate<'c>(
     let limit = ctx.limits.max_storage_buffer_binding_size;
     let b = u64::from(bounces);
     let groups = tables::groups(bounces);
-    let max_batch = MAX_BATCH
+    let max_batch = plan::MAX_BATCH
         .min(tables::max_batch_for_seeds(groups))
         .min(limit / (b * VPL_BYTES))
         .max(1);
-    let out_bytes = (target as u64 + b) * VPL_BYTES;
-    if out_bytes > limit {
+    // The last path kept may leave up to `bounces` VPLs past the target.
+    let capacity = target as u64 + b;
+    if capacity * VPL_BYTES > limit {
         return Err(too_large());
     }
-    let out = ctx.output("vpls", out_bytes)?;
+    let out = ctx.output("vpls", capacity * VPL_BYTES)?;
     let status = ctx.output("vpl status", 16)?;
     let [paths_src, compact_src, grid_src, bins_src] = sources();
+    let kernels = Kernels {
+        grid: &grid_src,
+        bins: &bins_src,
+    };
     let paths_kernel = ctx.pipeline("vpl paths", || paths_src);
     let compact_kernel = ctx.pipeline("vpl compact", || compact_src);
     let set_seed = path_seed(seed);
     let cap = max_paths(target);
+    let key = (world.geometry_id(), world.lights.len(), bounces);
+    let known = ctx.vpl_yields().get(key);
     let (mut paths, mut done) = (0u64, 0u64);
-    while paths < cap {
-        // As the CPU plans its batches: the first as if every path left `bounces` VPLs,
-        // the next from the VPLs per path seen so far, plus 5%.
-        let missing = (target as u64 - done) as f64;
-        let planned = if paths == 0 {
-            missing / b as f64
-        } else {
-            1.05 * missing * paths as f64 / done.max(1) as f64
-        };
-        let n = (planned.ceil() as u64)
-            .clamp(MIN_BATCH, max_batch)
-            .min(cap - paths);
+    // The last batch's read-backs, and what follows the paths if it was recorded there.
+    let mut last = None;
+    while paths < cap && done < target as u64 {
+        let planned = plan::next_batch(
+            (paths, done, target as u64 - done),
+            known,
+            bounces,
+            (max_batch, cap - paths),
+        );
+        let n = planned.paths;
         let mut seeds = [[0u32; 4]; tables::MAX_SEEDS / 4];
         for (i, s) in tables::seeds(set_seed, paths, n, groups)
             .into_iter()
@@ -203,6 +214,8 @@ fn generate<'c>(
                 bounces,
                 done: done as u32,
                 target: target32,
+                first: paths as u32,
+                pad: [0; 3],
             },
         );
         let slots = ctx.output("vpl slots", n * b * VPL_BYTES)?;
@@ -228,6 +241,17 @@ fn generate<'c>(
         );
         batch.dispatch("vpl compact", &compact_kernel, &bind, n as usize)?;
         batch.read(status.buffer(), 16)?;
+        let after = if planned.last {
+            Some(record_after(
+                ctx,
+                &mut batch,
+                (&out, &status, capacity),
+                want,
+                kernels,
+            )?)
+        } else {
+            None
+        };
         let (reads, _) = batch.finish()?;
         let words: &[u32] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
         let [kept, count, ..] = *words else {
@@ -237,27 +261,29 @@ fn generate<'c>(
         };
         paths += u64::from(kept);
         done = u64::from(count);
-        if done >= target as u64 {
-            break;
-        }
+        last = Some((reads, after));
     }
-    let scale = 1.0 / paths.max(1) as f32;
-    let mut batch = Batch::new(ctx);
-    let bins = want == Want::GridBins;
-    let grid_in = if want != Want::Cpu && done > 0 {
-        let kernels = (grid_src, bins.then_some(bins_src));
-        let (lights, bounds) = to_grid_layout(ctx, &mut batch, (&out, done, scale), kernels)?;
-        if want != Want::CpuAndGrid {
-            batch.read(bounds.buffer(), bounds.bytes())?;
-        }
-        batch.keep(bounds);
-        Some(lights)
-    } else {
-        None
+    let Some((reads, after)) = last else {
+        return Ok((VplSet::default(), None));
     };
+    ctx.vpl_yields().set(key, paths, done);
+    // What follows the paths, where the last batch did not record it (the status it reads
+    // is the last batch's).
+    let (reads, after) = match after {
+        Some(after) => (reads, after),
+        None => {
+            let mut batch = Batch::new(ctx);
+            let after = record_after(ctx, &mut batch, (&out, &status, capacity), want, kernels)?;
+            (batch.finish()?.0, after)
+        }
+    };
+    let read = |i: Option<usize>| -> &[u32] {
+        i.and_then(|i| reads.get(i))
+            .map_or(&[], |r| bytemuck::cast_slice(r))
+    };
+    let scale = 1.0 / paths.max(1) as f32;
+    let grid_in = after.grid.filter(|_| done > 0);
     if matches!(want, Want::Grid | Want::GridBins) {
-        let (reads, _) = batch.finish()?;
-        let words: &[u32] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
         let Some(lights) = grid_in else {
             // No VPL.
             let set = VplSet {
@@ -266,7 +292,8 @@ fn generate<'c>(
             };
             return Ok((set, None));
         };
-        let parts = held_parts(words, if bins { NORMAL_BINS } else { 1 });
+        let bins = want == Want::GridBins;
+        let parts = held_parts(read(after.bounds), if bins { NORMAL_BINS } else { 1 });
         let kept_bins = bins.then(|| std::array::from_fn(|b| parts[b].count));
         let held = resident::Held::new(done as usize, parts, scale);
         resident::keep_held(ctx, lights, out, held);
@@ -278,13 +305,7 @@ fn generate<'c>(
         };
         return Ok((set, None));
     }
-    batch.read(out.buffer(), (done.max(1)) * VPL_BYTES)?;
-    let (reads, _) = batch.finish()?;
-    let vpls = unpack(
-        reads.first().map_or(&[], |r| bytemuck::cast_slice(r)),
-        done as usize,
-        scale,
-    );
+    let vpls = unpack(bytemuck::cast_slice(read(after.vpls)), done as usize, scale);
     Ok((
         VplSet {
             vpls,
@@ -293,6 +314,59 @@ fn generate<'c>(
         },
         grid_in,
     ))
+}
+
+/// The WGSL sources of the kernels that follow the light paths ([`sources`]).
+#[derive(Clone, Copy)]
+struct Kernels<'a> {
+    grid: &'a str,
+    bins: &'a str,
+}
+
+/// What follows the light paths, recorded in a batch ([`record_after`]): the VPLs in the
+/// build's layout, and which of the batch's read-backs hold their bounds or the VPLs.
+struct After<'c> {
+    grid: Option<Lease<'c>>,
+    bounds: Option<usize>,
+    vpls: Option<usize>,
+}
+
+/// Records into `batch` what a frame that wants its VPLs where `want` says does after the
+/// light paths that wrote `out` and `status` (`capacity` VPLs at most): the conversion into
+/// the build's layout (its bounds read back where the VPLs are not) and the VPLs' read-back.
+/// The kernels read the number of VPLs and of paths from `status`, so that this can go
+/// into the submission of the last batch of paths, before those numbers are known.
+///
+/// # Errors
+/// A buffer could not be leased, or the VPLs exceed a dispatch or the scan.
+fn record_after<'c>(
+    ctx: &'c GpuContext,
+    batch: &mut Batch<'c>,
+    (out, status, capacity): (&Lease<'c>, &Lease<'c>, u64),
+    want: Want,
+    kernels: Kernels<'_>,
+) -> Result<After<'c>, GpuError> {
+    let mut after = After {
+        grid: None,
+        bounds: None,
+        vpls: None,
+    };
+    if want != Want::Cpu {
+        let bins = (want == Want::GridBins).then_some(kernels.bins);
+        let (lights, bounds) =
+            to_grid_layout(ctx, batch, (out, status, capacity), (kernels.grid, bins))?;
+        if want != Want::CpuAndGrid {
+            after.bounds = Some(batch.reads());
+            batch.read(bounds.buffer(), bounds.bytes())?;
+        }
+        batch.keep(bounds);
+        after.grid = Some(lights);
+    }
+    if matches!(want, Want::Cpu | Want::CpuAndGrid) {
+        after.vpls = Some(batch.reads());
+        batch.read(out.buffer(), capacity * VPL_BYTES)?;
+    }
+    Ok(after)
 }
 
 /// Words per bin of `shaders/vpl_grid.wgsl`'s bounds: lo, hi (as order-preserving bits),
@@ -339,30 +413,31 @@ fn held_parts(words: &[u32], bins: usize) -> Vec<resident::Part> {
         .collect()
 }
 
-/// Records into `batch` the conversion of `count` light-path records in `records` (flux
-/// scaled by `scale`) into the hierarchy build's layout (`shaders/vpl_grid.wgsl`), sorted
-/// by normal bin where the split's kernel is given (`shaders/vpl_bins.wgsl`, then
-/// [`crate::scan`]; the kernels' sources are [`sources`]'s, made once a frame); returns the
-/// lights and their bounds' words ([`BIN_WORDS`] per bin, six bins).
+/// Records into `batch` the conversion of the light-path records in `records` (at most
+/// `capacity`; their number and the flux scale, one over the paths, read from the paths'
+/// `status`) into the hierarchy build's layout (`shaders/vpl_grid.wgsl`), sorted by normal
+/// bin where the split's kernel is given (`shaders/vpl_bins.wgsl`, then [`crate::scan`];
+/// the kernels' sources are [`sources`]'s, made once a frame); returns the lights and their
+/// bounds' words ([`BIN_WORDS`] per bin, six bins).
 ///
 /// # Errors
 /// A buffer could not be leased, or the VPLs exceed a dispatch or the scan.
 fn to_grid_layout<'c>(
     ctx: &'c GpuContext,
     batch: &mut Batch<'c>,
-    (records, count, scale): (&Lease<'c>, u64, f32),
-    (grid_src, bins_src): (String, Option<String>),
+    (records, status, capacity): (&Lease<'c>, &Lease<'c>, u64),
+    (grid_src, bins_src): (&str, Option<&str>),
 ) -> Result<(Lease<'c>, Lease<'c>), GpuError> {
     let lights = ctx.lease(
         crate::grid::LIGHTS_IN,
-        count * crate::grid::LIGHT_BYTES,
+        capacity * crate::grid::LIGHT_BYTES,
         GpuContext::STORAGE,
     )?;
     // Per bin: lo, hi (as order-preserving bits), the first invalid index, the count.
     let max = u32::MAX;
     let empty: Vec<u32> = [max, max, max, 0, 0, 0, max, 0].repeat(NORMAL_BINS);
     let bounds = ctx.upload("vpl bounds", &empty)?;
-    let words = count.div_ceil(32);
+    let words = capacity.div_ceil(32);
     let bins = bins_src.is_some();
     let (bits, prefix) = if let Some(bins_src) = bins_src {
         let n = NORMAL_BINS as u64 * words;
@@ -372,17 +447,18 @@ fn to_grid_layout<'c>(
         );
         let total = ctx.output("vpl bin total", 16)?;
         batch.clear_lease(&bits);
-        let params = ctx.uniform("vpl bins params", &[count as u32, words as u32, 0, 0]);
-        let kernel = ctx.pipeline("vpl bins", || bins_src);
+        let params = ctx.uniform("vpl bins params", &[capacity as u32, words as u32, 0, 0]);
+        let kernel = ctx.pipeline("vpl bins", || bins_src.to_owned());
         let bind = ctx.bind_group(
             &kernel,
             vec![
                 params.as_entire_binding(),
                 records.binding(),
                 bits.binding(),
+                status.binding(),
             ],
         );
-        batch.dispatch("vpl bins", &kernel, &bind, count as usize)?;
+        batch.dispatch("vpl bins", &kernel, &bind, capacity as usize)?;
         crate::scan::record(ctx, batch, &bits, &prefix, &total, n as usize, true)?;
         batch.keep(total);
         (bits, prefix)
@@ -395,13 +471,13 @@ fn to_grid_layout<'c>(
     let params = ctx.uniform(
         "vpl grid params",
         &GridInParams {
-            count: count as u32,
-            scale,
+            capacity: capacity as u32,
             bins: u32::from(bins),
             words: words as u32,
+            pad: 0,
         },
     );
-    let kernel = ctx.pipeline("vpl grid", || grid_src);
+    let kernel = ctx.pipeline("vpl grid", || grid_src.to_owned());
     let bind = ctx.bind_group(
         &kernel,
         vec![
@@ -411,9 +487,10 @@ fn to_grid_layout<'c>(
             bounds.binding(),
             bits.binding(),
             prefix.binding(),
+            status.binding(),
         ],
     );
-    batch.dispatch("vpl grid", &kernel, &bind, count as usize)?;
+    batch.dispatch("vpl grid", &kernel, &bind, capacity as usize)?;
     batch.keep(bits);
     batch.keep(prefix);
     Ok((lights, bounds))
