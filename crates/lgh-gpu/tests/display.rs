@@ -310,14 +310,16 @@ fn row_of_lights(world: &lgh_render::World, count: usize) -> Vec<lgh_scene::ligh
 /// standing still, from the edge list read back and sorted). So do the frames whose steps
 /// fall back to the CPU: one level shown alone (the grids on the CPU; the planes stay), an
 /// interleaving blur wider than the GPU's (the ratio filter on the CPU) and 65 point
-/// lights (the direct light on the CPU), which read the planes back.
+/// lights (the direct light on the CPU), which read the planes back. At the viewer's
+/// settings (one hierarchy per normal bin) such a frame waits for the GPU five times (six
+/// for the first, whose VPL yield is not known yet).
 #[test]
 #[cfg_attr(
     not(gpu_adapter),
     ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
 )]
 fn moving_frames_shown_on_the_gpu_leave_the_planes_there() {
-    use lgh_gpu::batch::read_back_bytes;
+    use lgh_gpu::batch::{read_back_bytes, waits};
     let ctx = GpuContext::shared().expect("an adapter");
     // Whether the frame reads the planes back: no, yes, or left open (one level alone reads
     // back VPLs and grids, not planes).
@@ -352,10 +354,17 @@ fn moving_frames_shown_on_the_gpu_leave_the_planes_there() {
                 linear: false,
                 taa: None,
             };
-            let before = read_back_bytes();
+            let (before, waited) = (read_back_bytes(), waits());
             let mut got =
                 render_frame_shown(&world, &s, &Silent, &mut lazy, request).expect("shown");
             let bytes = read_back_bytes() - before;
+            let waited = waits() - waited;
+            if what == "viewer" {
+                // The VPLs (once their yield is known), the builds of all normal bins
+                // (two), the tile counts and the frame; the first frame's VPLs twice.
+                let most = if frame == 0 { 6 } else { 5 };
+                assert!(waited <= most, "{what}, frame {frame}: {waited} waits");
+            }
             let n = (w * h) as u64;
             assert!(got.gbuffer.planes_deferred(), "{what}: planes read back");
             match planes_back {

@@ -437,6 +437,15 @@ pub trait HierarchyBuilder: Send {
         Err(GridError::KeptOnDevice)
     }
 
+    /// Says that the next calls of [`HierarchyBuilder::build_held`] build `parts` (part,
+    /// count) in this order with `levels` and `construction`, so that a builder whose
+    /// device waits for each build's counts may build them together now (one wait per step
+    /// for all parts instead of one per part) and answer those calls from what it built.
+    /// By default nothing.
+    fn prepare_held(&mut self, parts: &[(usize, usize)], levels: LevelCount, c: Construction) {
+        let _ = (parts, levels, c);
+    }
+
     /// The last hierarchy built; `None` also where the builder keeps it on its device
     /// ([`HierarchyBuilder::shape`] then describes it).
     fn grid(&self) -> Option<&LightingGrid>;

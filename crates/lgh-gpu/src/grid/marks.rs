@@ -4,8 +4,8 @@
 //! wait). The level rule chooses l_max from the counts, and the next step sizes its buffers
 //! by them.
 
-use super::{GridParams, record};
-use crate::batch::{Batch, PassTimes};
+use super::GridParams;
+use crate::batch::{Batch, PassTimes, Words};
 use crate::context::{GpuContext, GpuError};
 use crate::pool::Lease;
 
@@ -48,19 +48,30 @@ fn word_starts(count: u32) -> Vec<u32> {
     starts
 }
 
-/// Marks the `n` uploaded `lights` at resolutions 0..`resolutions` (grid placed by `base`),
-/// numbers the marks and reads back the counts; the GPU's pass times go to `passes`.
+/// Marks recorded into a batch and not yet read back ([`record`]).
+pub(super) struct Pending<'c> {
+    starts: Vec<u32>,
+    word_start: Lease<'c>,
+    bits: Lease<'c>,
+    prefix: Lease<'c>,
+    resolutions: u32,
+    /// The batch's read-back that holds the counts.
+    read: usize,
+}
+
+/// Records into `batch` the marks of the `n` uploaded `lights` at resolutions
+/// 0..`resolutions` (grid placed by `base`), their numbering and the counts' read-back.
 ///
 /// # Errors
-/// A buffer could not be leased, or the GPU failed.
-pub(super) fn mark<'c>(
+/// A buffer could not be leased.
+pub(super) fn record<'c>(
     ctx: &'c GpuContext,
+    batch: &mut Batch<'c>,
     lights: &Lease<'c>,
     base: &GridParams,
     n: usize,
     resolutions: u32,
-    passes: &mut PassTimes,
-) -> Result<Marks<'c>, GpuError> {
+) -> Result<Pending<'c>, GpuError> {
     let starts = word_starts(resolutions);
     let words = starts[resolutions as usize] as usize;
     let word_start = ctx.upload("grid word starts", &starts)?;
@@ -68,7 +79,6 @@ pub(super) fn mark<'c>(
     let prefix = ctx.output("grid prefix", 4 * words as u64)?;
     let total = ctx.output("grid total", 16)?;
     let misc = ctx.output("grid misc", 4 * 16)?;
-    let mut batch = Batch::new(ctx);
     batch.clear_lease(&bits);
     batch.clear_lease(&misc);
     let p = GridParams {
@@ -76,9 +86,9 @@ pub(super) fn mark<'c>(
         count: resolutions,
         ..*base
     };
-    record(
+    super::record(
         ctx,
-        &mut batch,
+        batch,
         "grid_mark",
         "grid mark",
         &p,
@@ -89,10 +99,10 @@ pub(super) fn mark<'c>(
             misc.binding(),
         ],
     )?;
-    crate::scan::record(ctx, &mut batch, &bits, &prefix, &total, words, true)?;
-    record(
+    crate::scan::record(ctx, batch, &bits, &prefix, &total, words, true)?;
+    super::record(
         ctx,
-        &mut batch,
+        batch,
         "grid_counts",
         "grid counts",
         &GridParams {
@@ -106,21 +116,58 @@ pub(super) fn mark<'c>(
             misc.binding(),
         ],
     )?;
+    let read = batch.reads();
     batch.read(misc.buffer(), misc.bytes())?;
     batch.keep(total);
     batch.keep(misc);
-    let (reads, gpu) = batch.finish()?;
-    passes.extend(gpu);
-    let misc: &[u32] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
-    let counts = (0..resolutions as usize)
-        .map(|k| misc.get(1 + k).copied().unwrap_or(0) as usize)
-        .collect();
-    Ok(Marks {
+    Ok(Pending {
         starts,
         word_start,
         bits,
         prefix,
-        counts,
-        imax: f32::from_bits(misc.first().copied().unwrap_or(0)),
+        resolutions,
+        read,
     })
+}
+
+impl<'c> Pending<'c> {
+    /// The marks, with the counts from the read-backs `reads` of the batch they were
+    /// recorded in.
+    pub(super) fn finish(self, reads: &[Vec<Words>]) -> Marks<'c> {
+        let misc: &[u32] = reads
+            .get(self.read)
+            .map_or(&[], |r| bytemuck::cast_slice(r));
+        let counts = (0..self.resolutions as usize)
+            .map(|k| misc.get(1 + k).copied().unwrap_or(0) as usize)
+            .collect();
+        Marks {
+            starts: self.starts,
+            word_start: self.word_start,
+            bits: self.bits,
+            prefix: self.prefix,
+            counts,
+            imax: f32::from_bits(misc.first().copied().unwrap_or(0)),
+        }
+    }
+}
+
+/// Marks the `n` uploaded `lights` at resolutions 0..`resolutions` (grid placed by `base`),
+/// numbers the marks and reads back the counts, in a batch of its own (one wait); the GPU's
+/// pass times go to `passes`.
+///
+/// # Errors
+/// A buffer could not be leased, or the GPU failed.
+pub(super) fn mark<'c>(
+    ctx: &'c GpuContext,
+    lights: &Lease<'c>,
+    base: &GridParams,
+    n: usize,
+    resolutions: u32,
+    passes: &mut PassTimes,
+) -> Result<Marks<'c>, GpuError> {
+    let mut batch = Batch::new(ctx);
+    let pending = record(ctx, &mut batch, lights, base, n, resolutions)?;
+    let (reads, gpu) = batch.finish()?;
+    passes.extend(gpu);
+    Ok(pending.finish(&reads))
 }

@@ -48,6 +48,7 @@ mod build;
 mod draw;
 mod marks;
 mod number;
+mod together;
 mod transfer;
 
 pub use number::Numbered;
@@ -220,6 +221,8 @@ pub struct GpuGridBuilder<'c> {
     /// Whether the builds keep their grid on the GPU instead of reading it back
     /// ([`GpuGridBuilder::keep_grid`]).
     keep_grid: bool,
+    /// The builds made ahead ([`HierarchyBuilder::prepare_held`]).
+    ahead: together::Aheads<'c>,
 }
 
 /// What the GPU holds of one build for the frame's later passes.
@@ -241,6 +244,9 @@ pub struct Held<'c> {
     /// The records numbered as the CPU keeps them, where they are kept (`None` also
     /// without records).
     pub numbered: Option<Numbered<'c>>,
+    /// The grid's shape where it stays on the GPU and the build was made together with
+    /// others ([`HierarchyBuilder::prepare_held`]); else in the builder's state.
+    shape: Option<GridShape>,
 }
 
 /// States kept per context: one per frame building at once.
@@ -266,6 +272,7 @@ impl<'c> GpuGridBuilder<'c> {
             kept: Vec::new(),
             keep_slots: false,
             keep_grid: false,
+            ahead: together::Aheads::new(),
         }
     }
 
@@ -389,6 +396,28 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
     ) -> Result<BuildTimings, GridError> {
         self.fallback = None;
         self.passes.clear();
+        // Made ahead with others.
+        if let Some(a) = self.ahead.pop_front() {
+            if (a.part, a.count) == (part, count) {
+                (self.fallback, self.passes) = (a.fallback, a.passes);
+                let state = self.state();
+                state.drawn = false;
+                return match a.result {
+                    Ok((t, mut held)) => {
+                        state.kept_shape = held.shape.take();
+                        state.on_cpu = false;
+                        state.built = true;
+                        self.kept.push(Some(held));
+                        Ok(t)
+                    }
+                    Err(e) => {
+                        state.built = false;
+                        Err(e)
+                    }
+                };
+            }
+            self.ahead.clear();
+        }
         let held = crate::vpls::resident::take_held(self.ctx, part, count);
         let Some((lights, bounds)) = held.filter(|_| construction != Construction::GatherFromS1)
         else {
@@ -416,6 +445,15 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
                 Err(GridError::KeptOnDevice)
             }
         }
+    }
+
+    fn prepare_held(
+        &mut self,
+        parts: &[(usize, usize)],
+        levels: LevelCount,
+        construction: Construction,
+    ) {
+        self.build_ahead(parts, levels, construction);
     }
 
     fn device(&self) -> &'static str {

@@ -237,6 +237,17 @@ impl LghFrame {
         // A builder that can draw the S_1 representatives with the build (a GPU's) does.
         let draw = k > 0 && unbiased && settings.shadow_target == ShadowTarget::Representative;
         builder.draw_representatives(draw.then_some(seed));
+        if held {
+            // A device that holds the parts may build them together (fewer waits).
+            let start = Instant::now();
+            let parts: Vec<(usize, usize)> = groups
+                .iter()
+                .filter(|g| g.1 > 0)
+                .map(|g| (g.2, g.1))
+                .collect();
+            builder.prepare_held(&parts, settings.levels, settings.construction);
+            build_ms += start.elapsed().as_secs_f64() * 1e3;
+        }
         for &(group, count, part) in groups.iter().filter(|g| g.1 > 0) {
             let start = Instant::now();
             if held {
