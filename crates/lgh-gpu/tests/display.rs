@@ -310,9 +310,9 @@ fn row_of_lights(world: &lgh_render::World, count: usize) -> Vec<lgh_scene::ligh
 /// standing still, from the edge list read back and sorted). So do the frames whose steps
 /// fall back to the CPU: one level shown alone (the grids on the CPU; the planes stay), an
 /// interleaving blur wider than the GPU's (the ratio filter on the CPU) and 65 point
-/// lights (the direct light on the CPU), which read the planes back. At the viewer's
-/// settings (one hierarchy per normal bin) such a frame waits for the GPU five times (six
-/// for the first, whose VPL yield is not known yet).
+/// lights (the direct light on the CPU), which read the planes back. With one hierarchy
+/// per normal bin (the render's default) or one (the viewer's start), such a frame waits
+/// for the GPU five times (six for the first, whose VPL yield is not known yet).
 #[test]
 #[cfg_attr(
     not(gpu_adapter),
@@ -323,8 +323,9 @@ fn moving_frames_shown_on_the_gpu_leave_the_planes_there() {
     let ctx = GpuContext::shared().expect("an adapter");
     // Whether the frame reads the planes back: no, yes, or left open (one level alone reads
     // back VPLs and grids, not planes).
-    let cases: [(&str, Change, Option<bool>); 4] = [
+    let cases: [(&str, Change, Option<bool>); 5] = [
         ("viewer", |_| {}, Some(false)),
+        ("one hierarchy", |s| s.lgh.normal_bins = false, Some(false)),
         ("one level", |s| s.lgh.only_level = Some(2), None),
         ("wide blur", |s| s.tiling.blur.radius = 24, Some(true)),
         ("65 lights", |_| {}, Some(true)),
@@ -359,7 +360,7 @@ fn moving_frames_shown_on_the_gpu_leave_the_planes_there() {
                 render_frame_shown(&world, &s, &Silent, &mut lazy, request).expect("shown");
             let bytes = read_back_bytes() - before;
             let waited = waits() - waited;
-            if what == "viewer" {
+            if planes_back == Some(false) {
                 // The VPLs (once their yield is known), the builds of all normal bins
                 // (two), the tile counts and the frame; the first frame's VPLs twice.
                 let most = if frame == 0 { 6 } else { 5 };
