@@ -52,21 +52,15 @@ pub fn record<'c>(
         .filter(|&g| g <= ctx.limits.max_compute_workgroups_per_dimension)
         .ok_or_else(|| GpuError::TooLarge(format!("a scan of {n} elements")))?;
     let sums = ctx.output("scan blocks", 4 * blocks as u64)?;
-    let params = ctx.uniform(
-        "scan params",
-        &ScanParams {
-            n: n as u32,
-            popcount: u32::from(popcount),
-            pad: [0; 2],
-        },
-    );
-    let block_params = ctx.uniform(
-        "scan params",
-        &ScanParams {
-            n: blocks as u32,
-            ..ScanParams::default()
-        },
-    );
+    let params = batch.uniform(&ScanParams {
+        n: n as u32,
+        popcount: u32::from(popcount),
+        pad: [0; 2],
+    })?;
+    let block_params = batch.uniform(&ScanParams {
+        n: blocks as u32,
+        ..ScanParams::default()
+    })?;
     let [local, over, add] = sources();
     let local = ctx.pipeline("scan local", || local);
     let over = ctx.pipeline("scan blocks", || over);

@@ -63,23 +63,20 @@ pub(crate) fn record(
     let pipeline = ctx.pipeline("atrous", source);
     let (width, height) = geo.size;
     for pass in 0..passes {
-        let uniform = ctx.uniform(
-            "a-trous pass",
-            &Params {
-                width,
-                height,
-                step: 1 << pass,
-                geo_stride: geo.stride,
-                inv_c: 4f32.powi(pass as i32) / params.c_phi,
-                inv_n: 1.0 / params.n_phi,
-                inv_p: 1.0 / params.p_phi,
-                inv_a: if params.a_phi > 0.0 {
-                    1.0 / params.a_phi
-                } else {
-                    0.0
-                },
+        let uniform = batch.uniform(&Params {
+            width,
+            height,
+            step: 1 << pass,
+            geo_stride: geo.stride,
+            inv_c: 4f32.powi(pass as i32) / params.c_phi,
+            inv_n: 1.0 / params.n_phi,
+            inv_p: 1.0 / params.p_phi,
+            inv_a: if params.a_phi > 0.0 {
+                1.0 / params.a_phi
+            } else {
+                0.0
             },
-        );
+        })?;
         let (from, to) = (pair[pass % 2], pair[1 - pass % 2]);
         let bind = ctx.bind_group(
             &pipeline,

@@ -553,7 +553,7 @@ pub(super) fn record(
     buffers: Vec<wgpu::BindingResource<'_>>,
 ) -> Result<(), GpuError> {
     let pipe = pipeline(ctx, kernel);
-    let uniform = ctx.uniform("grid params", p);
+    let uniform = batch.uniform(p)?;
     let mut resources = vec![uniform.as_entire_binding()];
     resources.extend(buffers);
     let bind = ctx.bind_group(&pipe, resources);

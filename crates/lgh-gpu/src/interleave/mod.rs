@@ -108,15 +108,12 @@ pub(crate) fn record<'c>(
         return Ok(());
     };
     let pipeline = ctx.pipeline("discontinuities", discontinuities_source);
-    let uniform = ctx.uniform(
-        "discontinuities",
-        &JumpParams {
-            width,
-            height,
-            z_diff: first.params.z_diff,
-            n_diff: first.params.n_diff,
-        },
-    );
+    let uniform = batch.uniform(&JumpParams {
+        width,
+        height,
+        z_diff: first.params.z_diff,
+        n_diff: first.params.n_diff,
+    })?;
     let bind = ctx.bind_group(
         &pipeline,
         vec![
@@ -150,22 +147,19 @@ pub(crate) fn record<'c>(
             } else {
                 (scratch, images)
             };
-            let uniform = ctx.uniform(
-                "blur",
-                &BlurUniform {
-                    width,
-                    height,
-                    vertical,
-                    radius: p.radius,
-                    phases: p.phases,
-                    planes,
-                    plane_first: group.first,
-                    plane_count: group.count,
-                    weights,
-                    a_diff: p.a_diff,
-                    _pad: [0.0; 3],
-                },
-            );
+            let uniform = batch.uniform(&BlurUniform {
+                width,
+                height,
+                vertical,
+                radius: p.radius,
+                phases: p.phases,
+                planes,
+                plane_first: group.first,
+                plane_count: group.count,
+                weights,
+                a_diff: p.a_diff,
+                _pad: [0.0; 3],
+            })?;
             let bind = ctx.bind_group(
                 &pipeline,
                 vec![
@@ -194,15 +188,12 @@ fn record_keys(
     (pixels, planes): (u32, u32),
 ) -> Result<(), GpuError> {
     let pipeline = ctx.pipeline("blur keys", keys_source);
-    let uniform = ctx.uniform(
-        "blur keys",
-        &KeyParams {
-            pixels,
-            planes,
-            plane: 0,
-            _pad: 0,
-        },
-    );
+    let uniform = batch.uniform(&KeyParams {
+        pixels,
+        planes,
+        plane: 0,
+        _pad: 0,
+    })?;
     let bind = ctx.bind_group(
         &pipeline,
         vec![

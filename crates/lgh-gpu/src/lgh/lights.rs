@@ -152,7 +152,7 @@ pub(super) fn record<'c>(
                 base: h.first,
                 ..base
             };
-            let uniform = ctx.uniform("light params", &params);
+            let uniform = batch.uniform(&params)?;
             let pipeline = ctx.pipeline("lights vpl rows", || vpl_src.clone());
             let bind = ctx.bind_group(
                 &pipeline,
@@ -169,7 +169,7 @@ pub(super) fn record<'c>(
         let (true, Some(numbers)) = (at > 0, &held.numbered) else {
             continue;
         };
-        let uniform = ctx.uniform("light params", &base);
+        let uniform = batch.uniform(&base)?;
         let pipeline = ctx.pipeline("lights rows", || rows_src.clone());
         let bind = ctx.bind_group(
             &pipeline,

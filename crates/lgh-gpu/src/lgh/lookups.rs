@@ -152,7 +152,7 @@ pub(super) fn record<'c>(
                 "lgh on the GPU: a hierarchy's records are not numbered".into(),
             ));
         };
-        let uniform = ctx.uniform("lookup params", &params);
+        let uniform = batch.uniform(&params)?;
         let common = (&uniform, records, &numbers.index);
         let row_records = ctx.output("lookup row records", 4 * u64::from(entry))?;
         let pipeline = ctx.pipeline("lookups rows", || rows_src.clone());
@@ -189,7 +189,7 @@ pub(super) fn record<'c>(
 /// The bindings of a lookups kernel: the uniform, the records and their numbers (`common`),
 /// then the kernel's own buffers.
 fn bindings<'a>(
-    (uniform, records, index): (&'a wgpu::Buffer, &'a Lease<'_>, &'a Lease<'_>),
+    (uniform, records, index): (&'a crate::batch::Uniform, &'a Lease<'_>, &'a Lease<'_>),
     extra: &[&'a Lease<'_>],
 ) -> Vec<wgpu::BindingResource<'a>> {
     let mut all = vec![

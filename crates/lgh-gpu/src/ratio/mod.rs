@@ -58,15 +58,12 @@ impl RatioPass<'_> {
         mode: u32,
         pair: &Lease<'_>,
     ) -> Result<(), GpuError> {
-        let uniform = ctx.uniform(
-            "ratio",
-            &RatioParams {
-                pixels: self.pixels,
-                mode,
-                max_ratio: self.max_ratio,
-                _p0: 0,
-            },
-        );
+        let uniform = batch.uniform(&RatioParams {
+            pixels: self.pixels,
+            mode,
+            max_ratio: self.max_ratio,
+            _p0: 0,
+        })?;
         let bind = ctx.bind_group(
             self.pipeline,
             vec![
