@@ -211,7 +211,9 @@ impl GpuContext {
         Arc::clone(pipeline)
     }
 
-    /// A uniform buffer holding `value`.
+    /// A uniform buffer of its own holding `value`, for a uniform rewritten between
+    /// submissions (the brute force's, per chunk of VPLs); a dispatch's uniform is
+    /// [`crate::Batch::uniform`].
     #[must_use]
     pub fn uniform<T: bytemuck::Pod>(&self, label: &str, value: &T) -> wgpu::Buffer {
         use wgpu::util::DeviceExt;

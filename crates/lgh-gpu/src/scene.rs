@@ -152,11 +152,11 @@ impl GpuScene {
     #[must_use]
     pub fn bindings<'a>(
         &'a self,
-        params: &'a wgpu::Buffer,
+        params: wgpu::BindingResource<'a>,
         gbuffer: &'a crate::gbuffer::GpuGBuffer,
     ) -> Vec<wgpu::BindingResource<'a>> {
         vec![
-            params.as_entire_binding(),
+            params,
             self.nodes.as_entire_binding(),
             self.tris.as_entire_binding(),
             gbuffer.binding(),

@@ -75,11 +75,11 @@ impl GpuSurfaces {
     #[must_use]
     pub fn bindings<'a>(
         &'a self,
-        params: &'a wgpu::Buffer,
+        params: wgpu::BindingResource<'a>,
         scene: &'a crate::GpuScene,
     ) -> Vec<wgpu::BindingResource<'a>> {
         vec![
-            params.as_entire_binding(),
+            params,
             scene.nodes.as_entire_binding(),
             scene.tris.as_entire_binding(),
             self.shade.as_entire_binding(),

@@ -161,8 +161,8 @@ pub(crate) fn pack_spheres(s: &LightSpheres) -> (Vec<Vec4>, Vec<u32>) {
 /// The count and write kernels' bindings: the uniform `u` (the write kernel's has the lists
 /// buffer's layout), the camera, then the spheres, flags, bounds and counters.
 fn reach<'a>(
-    u: &'a wgpu::Buffer,
-    cam: &'a wgpu::Buffer,
+    u: &'a crate::batch::Uniform,
+    cam: &'a crate::batch::Uniform,
     leases: [&'a Lease<'_>; 4],
 ) -> Vec<wgpu::BindingResource<'a>> {
     let mut r = vec![u.as_entire_binding(), cam.as_entire_binding()];
@@ -214,8 +214,9 @@ pub fn record<'c>(
     };
     let [bounds_src, count_src, write_src, sort_src, pixels_src] = sources();
     // The first submission: bounds, counts, starts.
-    let uniform = ctx.uniform("bin params", &params);
-    let cam = ctx.uniform("bin camera", &GpuCamera::new(camera, g.width, g.height));
+    let mut batch = first;
+    let uniform = batch.uniform(&params)?;
+    let cam = batch.uniform(&GpuCamera::new(camera, g.width, g.height))?;
     let (sphere_buf, flag_buf) = match on_gpu {
         Some(made) => made,
         None if spheres.centres.len() != spheres.count => {
@@ -235,7 +236,6 @@ pub fn record<'c>(
     let counts = ctx.output("bin counts", 4 * u64::from(lists))?;
     let starts = ctx.output("bin starts", 4 * u64::from(lists))?;
     let total = ctx.output("bin total", 16)?;
-    let mut batch = first;
     let pipeline = ctx.pipeline("bin bounds", || bounds_src);
     let bind = ctx.bind_group(
         &pipeline,
@@ -286,9 +286,11 @@ pub fn record<'c>(
         order: params.order_base,
         pixel_lists: params.list_base,
     };
-    let uniform = ctx.uniform("bin params", &params);
     let lists_buf = ctx.output("light lists", 4 * words)?;
+    // This submission's own uniforms (a batch's live in its own buffers).
     let mut batch = Batch::new(ctx);
+    let uniform = batch.uniform(&params)?;
+    let cam = batch.uniform(&GpuCamera::new(camera, g.width, g.height))?;
     batch.copy(&starts, 0, &lists_buf, 0, 4 * u64::from(lists));
     batch.copy(&total, 0, &lists_buf, 4 * u64::from(lists), 4);
     batch.clear_lease(&counts);

@@ -128,7 +128,7 @@ fn render_brute(ctx: &GpuContext, i: &MethodInputs, shadows: bool) -> Result<Vec
     let out = ctx.output("irradiance", 16 * n as u64)?;
     let params = ctx.uniform("brute params", &Params::zeroed());
     let pipeline = ctx.pipeline("brute", source);
-    let mut resources = scene.bindings(&params, &gbuffer);
+    let mut resources = scene.bindings(params.as_entire_binding(), &gbuffer);
     resources.extend([vpl_buf.binding(), out.binding()]);
     let bind = ctx.bind_group(&pipeline, resources);
     let chunk = (PAIRS_PER_DISPATCH / n.max(1)).clamp(1, MAX_VPLS_PER_DISPATCH);

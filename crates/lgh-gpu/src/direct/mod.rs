@@ -263,9 +263,9 @@ pub(crate) fn record_direct<'c>(
         ctx.output("direct S, U (next)", 32 * n as u64)?,
     ];
     let radiance = ctx.output("direct radiance", 16 * n as u64)?;
-    let params = ctx.uniform("direct params", &tables.params);
+    let params = batch.uniform(&tables.params)?;
     let pipeline = ctx.pipeline("direct", source);
-    let mut resources = scene.bindings(&params, &gbuf);
+    let mut resources = scene.bindings(params.as_entire_binding(), &gbuf);
     resources.extend([table.binding(), lit.binding(), pair[0].binding()]);
     let bind = ctx.bind_group(&pipeline, resources);
     batch.dispatch("direct_samples", &pipeline, &bind, n)?;
@@ -288,15 +288,12 @@ pub(crate) fn record_direct<'c>(
     } else {
         0
     };
-    let composite = ctx.uniform(
-        "direct composite params",
-        &CompositeParams {
-            pixels: n as u32,
-            analytic: u32::from(any_analytic),
-            max_ratio: RATIO_VISIBILITY,
-            _p0: 0,
-        },
-    );
+    let composite = batch.uniform(&CompositeParams {
+        pixels: n as u32,
+        analytic: u32::from(any_analytic),
+        max_ratio: RATIO_VISIBILITY,
+        _p0: 0,
+    })?;
     let pipeline = ctx.pipeline("direct_composite", composite_source);
     let bind = ctx.bind_group(
         &pipeline,

@@ -212,15 +212,12 @@ pub(crate) fn record<'c>(
     } else {
         None
     };
-    let params = ctx.uniform(
-        "display compose",
-        &ComposeParams {
-            pixels: n as u32,
-            emission: u32::from(emission.is_some()),
-            direct: bound[0],
-            indirect: bound[1],
-        },
-    );
+    let params = batch.uniform(&ComposeParams {
+        pixels: n as u32,
+        emission: u32::from(emission.is_some()),
+        direct: bound[0],
+        indirect: bound[1],
+    })?;
     let mut uploaded = uploads.iter();
     let mut bindings = Vec::new();
     for part in [parts.direct, parts.indirect] {
@@ -245,15 +242,12 @@ pub(crate) fn record<'c>(
     batch.dispatch("show", &pipeline, &bind, n)?;
     record_edges(ctx, batch, &image, edges, (g.width, g.height))?;
     let (sum, restart, frames) = running_sum(ctx, n, request.restart);
-    let show = ctx.uniform(
-        "display show",
-        &ShowParams {
-            pixels: n as u32,
-            restart: u32::from(restart),
-            inv_frames: 1.0 / frames as f32,
-            exposure: request.exposure,
-        },
-    );
+    let show = batch.uniform(&ShowParams {
+        pixels: n as u32,
+        restart: u32::from(restart),
+        inv_frames: 1.0 / frames as f32,
+        exposure: request.exposure,
+    })?;
     let packed = ctx.output("shown pixels", 4 * n as u64)?;
     let pipeline = ctx.pipeline("display_show", show_source);
     let bind = ctx.bind_group(
@@ -324,17 +318,14 @@ fn record_edges<'c>(
     let resolved = ctx.output("resolved edges", (16 * entries as u64).max(16))?;
     let pipeline = ctx.pipeline("display_edges", edges_source);
     for mode in 0..2 {
-        let params = ctx.uniform(
-            "display edges",
-            &EdgeParams {
-                edges: entries as u32,
-                width,
-                height,
-                mode,
-                inv_samples: 1.0 / samples as f32,
-                _p: [0; 3],
-            },
-        );
+        let params = batch.uniform(&EdgeParams {
+            edges: entries as u32,
+            width,
+            height,
+            mode,
+            inv_samples: 1.0 / samples as f32,
+            _p: [0; 3],
+        })?;
         let bind = ctx.bind_group(
             &pipeline,
             vec![

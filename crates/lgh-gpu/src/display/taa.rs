@@ -115,20 +115,17 @@ pub(crate) fn record<'c>(
         }
     };
     let s = &taa.settings;
-    let params = ctx.uniform(
-        "taa",
-        &Params {
-            pixels: n as u32,
-            width: g.width,
-            height: g.height,
-            history: mode,
-            alpha: s.alpha,
-            depth_tolerance: s.depth_tolerance,
-            normal_cos: s.normal_cos,
-            _p0: 0,
-        },
-    );
-    let previous = ctx.uniform("taa camera", &GpuCamera::new(&previous, g.width, g.height));
+    let params = batch.uniform(&Params {
+        pixels: n as u32,
+        width: g.width,
+        height: g.height,
+        history: mode,
+        alpha: s.alpha,
+        depth_tolerance: s.depth_tolerance,
+        normal_cos: s.normal_cos,
+        _p0: 0,
+    })?;
+    let previous = batch.uniform(&GpuCamera::new(&previous, g.width, g.height))?;
     let (old, new) = (history.last, 1 - history.last);
     let pipeline = ctx.pipeline("taa", source);
     let bind = ctx.bind_group(

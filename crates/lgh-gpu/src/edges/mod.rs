@@ -118,19 +118,16 @@ pub(crate) fn record<'c>(
         pair[2 * (s as usize % 2)] = o.x;
         pair[2 * (s as usize % 2) + 1] = o.y;
     }
-    let params = ctx.uniform(
-        "edge params",
-        &Params {
-            camera: GpuCamera::new(camera, w, h),
-            samples,
-            pad: [0; 3],
-            offsets,
-        },
-    );
+    let params = batch.uniform(&Params {
+        camera: GpuCamera::new(camera, w, h),
+        samples,
+        pad: [0; 3],
+        offsets,
+    })?;
     let list = ctx.output("edge pixels", (16 * n as u64).max(16))?;
     let count = ctx.output("edge count", 16)?;
     let pipeline = ctx.pipeline("edges", source);
-    let mut resources = surfaces.bindings(&params, &scene);
+    let mut resources = surfaces.bindings(params.as_entire_binding(), &scene);
     resources.extend([gbuffer.binding(), list.binding(), count.binding()]);
     let bind = ctx.bind_group(&pipeline, resources);
     batch.clear_lease(&count);

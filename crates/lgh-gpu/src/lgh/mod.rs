@@ -460,7 +460,7 @@ pub(super) fn record_loop<'c>(
         }
     };
     let params = Params::new(inputs, tables, &packed, layout)?;
-    let params = ctx.uniform("lgh params", &params);
+    let params = batch.uniform(&params)?;
     let gbuffer = ctx.gbuffer(g)?;
     let words = packed.words(ctx, &mut batch, tables)?;
     lookups::record(ctx, &mut batch, tables, &packed, &hierarchies, &words)?;
@@ -473,7 +473,7 @@ pub(super) fn record_loop<'c>(
     // Every pixel's three words are written by the kernel: no clearing.
     let out = ctx.output("A, S, U", 48 * n as u64)?;
     let pipeline = ctx.pipeline("lgh", source);
-    let mut resources = scene.bindings(&params, &gbuffer);
+    let mut resources = scene.bindings(params.as_entire_binding(), &gbuffer);
     resources.extend(buffers.iter().map(Lease::binding));
     resources.push(out.binding());
     let bind = ctx.bind_group(&pipeline, resources);

@@ -125,12 +125,12 @@ fn trace(
     let surfaces = scene.surfaces(ctx, world)?;
     let (packed, bytes) = ctx.gbuffer_buffer(n)?;
     let emission: Lease<'_> = ctx.output("emission", (n as u64 * EMISSION_BYTES).max(16))?;
-    let params = ctx.uniform("primary camera", &GpuCamera::new(camera, width, height));
+    let mut batch = Batch::new(ctx);
+    let params = batch.uniform(&GpuCamera::new(camera, width, height))?;
     let pipeline = ctx.pipeline("primary", source);
-    let mut resources = surfaces.bindings(&params, &scene);
+    let mut resources = surfaces.bindings(params.as_entire_binding(), &scene);
     resources.extend([packed.as_entire_binding(), emission.binding()]);
     let bind = ctx.bind_group(&pipeline, resources);
-    let mut batch = Batch::new(ctx);
     batch.dispatch("primary rays", &pipeline, &bind, n)?;
     let view = (world.geometry_id(), *camera);
     let Some(g) = g else {

@@ -191,41 +191,35 @@ fn generate<'c>(
         {
             seeds[i / 4][i % 4] = s;
         }
-        let params = ctx.uniform(
-            "vpl path params",
-            &PathParams {
-                centre: world.centre.into(),
-                radius: world.radius,
-                first: paths as u32,
-                paths: n as u32,
-                bounces,
-                lights: world.lights.len() as u32,
-                ray_eps: world.ray_epsilon,
-                block0: (paths / lgh_core::qmc::BLOCK) as u32,
-                groups,
-                pad: 0,
-                seeds,
-            },
-        );
-        let compact = ctx.uniform(
-            "vpl compact params",
-            &CompactParams {
-                paths: n as u32,
-                bounces,
-                done: done as u32,
-                target: target32,
-                first: paths as u32,
-                pad: [0; 3],
-            },
-        );
+        let mut batch = Batch::new(ctx);
+        let params = batch.uniform(&PathParams {
+            centre: world.centre.into(),
+            radius: world.radius,
+            first: paths as u32,
+            paths: n as u32,
+            bounces,
+            lights: world.lights.len() as u32,
+            ray_eps: world.ray_epsilon,
+            block0: (paths / lgh_core::qmc::BLOCK) as u32,
+            groups,
+            pad: 0,
+            seeds,
+        })?;
+        let compact = batch.uniform(&CompactParams {
+            paths: n as u32,
+            bounces,
+            done: done as u32,
+            target: target32,
+            first: paths as u32,
+            pad: [0; 3],
+        })?;
         let slots = ctx.output("vpl slots", n * b * VPL_BYTES)?;
         let counts = ctx.output("vpl counts", 4 * n)?;
         let prefix = ctx.output("vpl prefix", 4 * n)?;
         let total = ctx.output("vpl total", 16)?;
-        let mut resources = surfaces.bindings(&params, &scene);
+        let mut resources = surfaces.bindings(params.as_entire_binding(), &scene);
         resources.extend([lights.binding(), slots.binding(), counts.binding()]);
         let bind = ctx.bind_group(&paths_kernel, resources);
-        let mut batch = Batch::new(ctx);
         batch.dispatch("vpl paths", &paths_kernel, &bind, n as usize)?;
         crate::scan::record(ctx, &mut batch, &counts, &prefix, &total, n as usize, false)?;
         let bind = ctx.bind_group(
@@ -447,7 +441,7 @@ fn to_grid_layout<'c>(
         );
         let total = ctx.output("vpl bin total", 16)?;
         batch.clear_lease(&bits);
-        let params = ctx.uniform("vpl bins params", &[capacity as u32, words as u32, 0, 0]);
+        let params = batch.uniform(&[capacity as u32, words as u32, 0, 0])?;
         let kernel = ctx.pipeline("vpl bins", || bins_src.to_owned());
         let bind = ctx.bind_group(
             &kernel,
@@ -468,15 +462,12 @@ fn to_grid_layout<'c>(
             ctx.output("vpl bin places", 16)?,
         )
     };
-    let params = ctx.uniform(
-        "vpl grid params",
-        &GridInParams {
-            capacity: capacity as u32,
-            bins: u32::from(bins),
-            words: words as u32,
-            pad: 0,
-        },
-    );
+    let params = batch.uniform(&GridInParams {
+        capacity: capacity as u32,
+        bins: u32::from(bins),
+        words: words as u32,
+        pad: 0,
+    })?;
     let kernel = ctx.pipeline("vpl grid", || grid_src.to_owned());
     let bind = ctx.bind_group(
         &kernel,
