@@ -44,6 +44,20 @@ pub(super) struct Run<'a, 'c> {
     pub(super) request: &'a Request,
 }
 
+impl<'a, 'c> Run<'a, 'c> {
+    /// The build of `count` lights the GPU holds already (`lights`, with normals: the
+    /// frame's VPLs, not read back).
+    pub(super) fn held(lights: Lease<'c>, count: usize, request: &'a Request) -> Self {
+        Self {
+            lights: None,
+            resident: Some(lights),
+            count,
+            normals: true,
+            request,
+        }
+    }
+}
+
 /// Builds the hierarchy of `lights` on the GPU into `state` (its grid, and the S_1
 /// representatives where asked), with its timings in `t` and the GPU's pass times in
 /// `passes`; returns what the GPU holds of it: the lights, and the representatives where

@@ -429,14 +429,7 @@ impl HierarchyBuilder for GpuGridBuilder<'_> {
         }
         let mut t = BuildTimings::default();
         let request = self.request(bounds, levels);
-        let run = Run {
-            lights: None,
-            resident: Some(lights),
-            count,
-            normals: true,
-            request: &request,
-        };
-        match self.build_gpu(run, &mut t) {
+        match self.build_gpu(Run::held(lights, count, &request), &mut t) {
             Ok(()) => Ok(t),
             Err(e) => {
                 // The CPU has no copy to build from: the frame is made again with one.

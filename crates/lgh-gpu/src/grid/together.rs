@@ -109,13 +109,7 @@ fn build_together<'c>(
     let mut marking = Vec::with_capacity(runs.len());
     for (at, lights, request, count) in runs {
         let mut t = BuildTimings::default();
-        let run = Run {
-            lights: None,
-            resident: Some(lights),
-            count,
-            normals: true,
-            request: &request,
-        };
+        let run = Run::held(lights, count, &request);
         marking.push((at, record_marks(ctx, &mut batch, run, &mut t)?, t));
     }
     let (reads, gpu) = batch.finish()?;
