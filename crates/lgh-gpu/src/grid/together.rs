@@ -74,6 +74,8 @@ impl<'c> GpuGridBuilder<'c> {
                         self.request(bounds, levels),
                         count,
                     ));
+                    // Until its build below succeeds (a failed one leaves the frame to be
+                    // made again, as a failed build alone does).
                     Err(GridError::KeptOnDevice)
                 }
             };
