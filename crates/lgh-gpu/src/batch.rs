@@ -33,6 +33,19 @@ pub fn waits() -> u64 {
     WAITS.with(std::cell::Cell::get)
 }
 
+/// Adds pass times to `times`, summed by name in the order first seen.
+pub(crate) fn add_passes(
+    times: &mut PassTimes,
+    more: impl IntoIterator<Item = (&'static str, f64)>,
+) {
+    for (name, ms) in more {
+        match times.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, sum)) => *sum += ms,
+            None => times.push((name, ms)),
+        }
+    }
+}
+
 /// Timed passes one batch holds at most (further passes run untimed).
 const MAX_TIMED: u32 = 128;
 
@@ -318,13 +331,13 @@ impl<'c> Batch<'c> {
             let raw = out.pop().unwrap_or_default();
             let ticks: &[u64] = bytemuck::cast_slice(&raw);
             let period = f64::from(ctx.queue.get_timestamp_period());
-            for (name, t) in self.names.iter().zip(ticks.chunks_exact(2)) {
-                let ms = t[1].saturating_sub(t[0]) as f64 * period * 1e-6;
-                match times.iter_mut().find(|(n, _)| n == name) {
-                    Some((_, sum)) => *sum += ms,
-                    None => times.push((name, ms)),
-                }
-            }
+            add_passes(
+                &mut times,
+                self.names
+                    .iter()
+                    .zip(ticks.chunks_exact(2))
+                    .map(|(&name, t)| (name, t[1].saturating_sub(t[0]) as f64 * period * 1e-6)),
+            );
         }
         Ok((out, times))
     }

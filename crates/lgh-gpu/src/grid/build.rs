@@ -14,7 +14,7 @@ use super::{
     ACC_WORDS, GridParams, GridState, Held, MAX_INVOCATIONS, RECORD_WORDS, SUM_FLOATS, draw, marks,
     number, pipeline,
 };
-use crate::batch::{Batch, PassTimes, Words};
+use crate::batch::{Batch, PassTimes, Words, add_passes};
 use crate::context::{GpuContext, GpuError};
 use crate::pool::Lease;
 
@@ -82,16 +82,6 @@ pub(super) fn build_on<'c>(
     let (reads, gpu) = batch.finish()?;
     add_passes(passes, gpu);
     Ok(building.built(&reads, Some(state), t))
-}
-
-/// Adds a batch's pass times to `passes`, summed by name.
-pub(super) fn add_passes(passes: &mut PassTimes, gpu: PassTimes) {
-    for (name, ms) in gpu {
-        match passes.iter_mut().find(|(n, _)| *n == name) {
-            Some((_, sum)) => *sum += ms,
-            None => passes.push((name, ms)),
-        }
-    }
 }
 
 /// A build whose first step is recorded ([`record_marks`]).

@@ -10,9 +10,9 @@ use std::collections::VecDeque;
 
 use lgh_core::lighting_grid::{BuildTimings, Construction, GridError, LevelCount};
 
-use super::build::{Request, Run, add_passes, record_marks};
+use super::build::{Request, Run, record_marks};
 use super::{GpuGridBuilder, Held};
-use crate::batch::{Batch, PassTimes};
+use crate::batch::{Batch, PassTimes, add_passes};
 use crate::context::{GpuContext, GpuError};
 use crate::pool::Lease;
 
