@@ -311,8 +311,10 @@ fn print_table(
     threads: usize,
 ) {
     println!(
-        "Indirect light against a converged reference ({} brute-force frames of {} VPLs), {}x{}, {threads} threads",
-        args.reference_frames, args.reference_vpls, args.size.0, args.size.1
+        "Indirect light against a converged reference ({}), {}x{}, {threads} threads",
+        crate::bench_reference::describe(args),
+        args.size.0,
+        args.size.1
     );
     println!(
         "{:<14} {:<16} {:>9} {:>9} {:>9} {:>7} {:>9}",

@@ -85,8 +85,15 @@ pub struct QualityBenchArgs {
     pub reference_dir: PathBuf,
     /// --equal-time: brute-force frames of a reference, each with its own VPLs and sub-pixel
     /// position.
-    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    #[arg(long, default_value_t = 48, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub reference_frames: u32,
+    /// --equal-time: shadow rays per pixel of each reference frame on the CPU, drawn in
+    /// proportion to each VPL's unshadowed light (`--method brute-sampled`, unbiased for the
+    /// brute force: a frame costs a sixth of brute's on the two rooms, and the VPLs' noise,
+    /// which sets a reference's convergence, falls as fast); 0 = one ray per VPL (`brute`).
+    /// The GPU's references (`--reference-device gpu`) trace one ray per VPL.
+    #[arg(long, default_value_t = lgh_render::methods::brute::sampled::DEFAULT_BRUTE_RAYS, value_parser = clap::value_parser!(u32).range(0..=i64::from(lgh_render::methods::brute::sampled::MAX_BRUTE_RAYS)))]
+    pub reference_rays: u32,
     /// --equal-time: where the references' brute force runs: `gpu` (wgpu: Vulkan, Metal or
     /// DX12) converges them in a fraction of the time on a real GPU.
     #[arg(long, value_enum, default_value_t = crate::render_cmd::args::Device::Cpu)]

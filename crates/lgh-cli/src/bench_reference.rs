@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Result, anyhow, bail};
-use lgh_render::methods::brute::BRUTE;
+use lgh_render::methods::brute::{BRUTE, BRUTE_SAMPLED};
 use lgh_render::{Image, RenderSettings, World};
 
 use crate::bench_quality::{QualityBenchArgs, indirect_only, measure, prefix_means};
@@ -45,8 +45,13 @@ fn fingerprint(path: &Path) -> u64 {
 /// Where the reference of `scene` is cached by default.
 fn cached_path(args: &QualityBenchArgs, name: &str, scene: &Path) -> PathBuf {
     let (w, h) = args.size;
+    // Sampled rays name themselves; one ray per VPL keeps the name it always had.
+    let rays = match sampled_rays(args) {
+        0 => String::new(),
+        r => format!("-r{r}"),
+    };
     args.reference_dir.join(format!(
-        "{name}-{:08x}-{w}x{h}-{}x{}.exr",
+        "{name}-{:08x}-{w}x{h}-{}x{}{rays}.exr",
         fingerprint(scene) as u32,
         args.reference_frames,
         args.reference_vpls
@@ -85,12 +90,35 @@ fn load(path: &Path, size: (u32, u32), exposure: f32) -> Result<Reference> {
     })
 }
 
+/// The shadow rays per pixel of a reference frame drawn by `brute-sampled`, or 0 where
+/// every VPL has its own (`brute`, and the GPU's brute force).
+fn sampled_rays(args: &QualityBenchArgs) -> u32 {
+    match args.reference_device {
+        Device::Cpu => args.reference_rays,
+        Device::Gpu => 0,
+    }
+}
+
+/// What a reference is the mean of, e.g. "48 brute-force frames of 20000 VPLs, 256 rays a
+/// pixel".
+pub fn describe(args: &QualityBenchArgs) -> String {
+    let rays = match sampled_rays(args) {
+        0 => "a ray per VPL".to_string(),
+        r => format!("{r} rays a pixel"),
+    };
+    format!(
+        "{} brute-force frames of {} VPLs, {rays}",
+        args.reference_frames, args.reference_vpls
+    )
+}
+
 /// Renders the converged reference: the mean of `--reference-frames` brute-force frames of
 /// `--reference-vpls` VPLs each, every frame with its own VPLs and sub-pixel position, and
 /// the fixed 1/d^2 clamp of many VPLs (`--vpl-clamp 0`).
 fn compute(world: &World, args: &QualityBenchArgs, name: &str) -> Result<(Image, Image)> {
     let frames = args.reference_frames;
     let method = match args.reference_device {
+        Device::Cpu if args.reference_rays > 0 => BRUTE_SAMPLED,
         Device::Cpu => BRUTE,
         Device::Gpu => {
             let gpu = lgh_gpu::gpu_method(BRUTE)
@@ -104,6 +132,7 @@ fn compute(world: &World, args: &QualityBenchArgs, name: &str) -> Result<(Image,
     // The limit of many VPLs: the fixed clamp, whatever the VPLs of a frame.
     let base = RenderSettings {
         method,
+        brute_rays: args.reference_rays.max(1),
         vpl_clamp: 0.0,
         ..indirect_only(args.size, args.reference_vpls)
     };
@@ -146,9 +175,8 @@ pub fn reference(
     }
     if !args.options.json {
         eprintln!(
-            "{name}: converged reference, {} brute-force frames of {} VPLs -> {}",
-            args.reference_frames,
-            args.reference_vpls,
+            "{name}: converged reference, {} -> {}",
+            describe(args),
             path.display()
         );
     }
@@ -172,6 +200,7 @@ pub fn settings_json(args: &QualityBenchArgs) -> serde_json::Map<String, serde_j
     v.insert("height".into(), args.size.1.into());
     v.insert("reference_frames".into(), args.reference_frames.into());
     v.insert("reference_vpls".into(), args.reference_vpls.into());
+    v.insert("reference_rays".into(), sampled_rays(args).into());
     v
 }
 

@@ -241,6 +241,11 @@ pub struct RenderSettings {
     /// authors' fixed 0.01 R (docs/design.md, "Clamps").
     #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().vpl_clamp))]
     pub vpl_clamp: f32,
+    /// brute-sampled: shadow rays per pixel, drawn in proportion to each VPL's unshadowed
+    /// light (stratified), at most 65536. More rays, less visibility noise; the VPLs' own
+    /// noise is the same as brute's.
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = RenderSettings::default().brute_rays))]
+    pub brute_rays: u32,
     /// Ray-traced shadows of the methods that use the ratio estimator.
     #[cfg_attr(feature = "clap", command(flatten))]
     pub shadows: ShadowSettings,
@@ -278,6 +283,7 @@ impl Default for RenderSettings {
             error_bound: None,
             clamp_fraction: 0.01,
             vpl_clamp: DEFAULT_VPL_CLAMP,
+            brute_rays: crate::methods::brute::sampled::DEFAULT_BRUTE_RAYS,
             shadows: ShadowSettings::default(),
             tiling: Tiling::default(),
             lgh: LghSettings::default(),
@@ -496,6 +502,12 @@ impl RenderSettings {
             in_range("shadow-samples", k, 0, MAX_SHADOW_SAMPLES)?;
         }
         in_range("spp", self.pt.spp, 1, 1 << 20)?;
+        in_range(
+            "brute-rays",
+            self.brute_rays,
+            1,
+            crate::methods::brute::sampled::MAX_BRUTE_RAYS,
+        )?;
         in_range("area-samples", self.area_samples, 0, MAX_AREA_SAMPLES)?;
         in_range("bounces", self.bounces, 0, MAX_BOUNCES)?;
         in_range(

@@ -165,6 +165,9 @@ fn references_only_makes_the_references_and_stops() {
     let file = std::path::PathBuf::from(list[0]["reference"].as_str().unwrap());
     assert!(file.starts_with(&refs) && file.exists(), "{file:?}");
     assert_eq!(std::fs::read_dir(&refs).unwrap().count(), 2);
+    // The CPU's default samples the rays (brute-sampled), and the file's name says how many.
+    assert_eq!(v["reference_rays"], 256, "{v}");
+    assert!(file.to_string_lossy().ends_with("-r256.exr"), "{file:?}");
     // The sweep then reads it: no third file, and the table says the same convergence.
     let plot = d.join("et.png");
     let sweep = [
@@ -185,6 +188,13 @@ fn references_only_makes_the_references_and_stops() {
         "{v2}"
     );
     assert_eq!(std::fs::read_dir(&refs).unwrap().count(), 2);
+    // One ray per VPL is another reference, in a file of its own.
+    let out = lgh(&[&base[..], &["--references-only", "--reference-rays", "0"]].concat());
+    assert_ok(&out);
+    let v3: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v3["reference_rays"], 0, "{v3}");
+    assert_ne!(v3["references"][0]["reference"], list[0]["reference"]);
+    assert_eq!(std::fs::read_dir(&refs).unwrap().count(), 4);
     assert_error(
         &lgh(&["bench", "quality", "builtin:cornell", "--references-only"]),
         &["--references-only", "--equal-time"],
@@ -219,6 +229,9 @@ fn the_reference_renders_on_the_gpu_as_on_the_cpu() {
             "500",
             "--reference-device",
             device,
+            // One ray per VPL on the CPU too (its default samples them).
+            "--reference-rays",
+            "0",
             "--reference",
             s(&file),
             "--runs",

@@ -52,7 +52,7 @@ macro_rules! register {
 
 // The registry: one line per method folder.
 register! {
-    brute => [BRUTE, BRUTE_UNSHADOWED],
+    brute => [BRUTE, BRUTE_UNSHADOWED, BRUTE_SAMPLED],
     lgh => [LGH, LGH_UNSHADOWED],
     slc => [SLC, SLC_CLAMPED],
     pt => [PT_SLC, PT_UNIFORM, PT_CLAMPED],

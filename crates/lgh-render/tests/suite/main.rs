@@ -3,6 +3,7 @@
 mod accel;
 mod accumulate;
 mod analytic;
+mod brute_sampled;
 mod clamp;
 mod common;
 mod convergence;

@@ -25,6 +25,46 @@ pub const BRUTE: Method = Method::new(&Brute { shadowed: true });
 /// Every pixel sums every VPL, without shadow rays.
 pub const BRUTE_UNSHADOWED: Method = Method::new(&Brute { shadowed: false });
 
+/// Every pixel sums every VPL unshadowed and estimates their visibility from `--brute-rays`
+/// shadow rays drawn in proportion to each VPL's light (an unbiased estimate of [`BRUTE`];
+/// the converged references' estimator, [`sampled`]).
+pub const BRUTE_SAMPLED: Method = Method::new(&BruteSampled);
+
+pub mod sampled;
+
+/// The brute force with sampled visibility.
+struct BruteSampled;
+
+impl IndirectMethod for BruteSampled {
+    fn name(&self) -> &'static str {
+        "brute-sampled"
+    }
+
+    fn about(&self) -> &'static str {
+        "Every pixel sums every VPL unshadowed, with visibility from --brute-rays shadow rays drawn by each VPL's light (unbiased for brute)"
+    }
+
+    fn render(
+        &self,
+        inputs: &MethodInputs,
+        _memory: &mut FrameMemory,
+    ) -> Result<MethodOutput, RenderError> {
+        let radiance = sampled::render_brute_sampled(
+            inputs.world,
+            inputs.gbuffer,
+            inputs.vpls,
+            inputs.eps(),
+            inputs.settings.brute_rays,
+            inputs.settings.seed,
+            inputs.progress,
+        );
+        Ok(MethodOutput {
+            radiance,
+            ..MethodOutput::default()
+        })
+    }
+}
+
 /// The brute-force methods.
 struct Brute {
     /// One exact shadow ray per pixel and VPL, or none.
@@ -71,7 +111,7 @@ impl IndirectMethod for Brute {
 /// Contributions to one point waiting for their shadow rays, traced together (Embree traces
 /// a batch as a stream) and added to the point's sum one by one in the order they came, so
 /// that the sum is the same as without batches.
-struct ShadowBatch {
+pub(super) struct ShadowBatch {
     contribution: [Vec3; BATCH],
     /// The shadow ray, `None` when the points are too close for anything between them.
     segment: [Option<Segment>; BATCH],
@@ -92,9 +132,18 @@ impl Default for ShadowBatch {
 }
 
 impl ShadowBatch {
+    /// Adds `c` to the last contribution (a second sample of the same ray).
+    ///
+    /// # Panics
+    /// If the batch is empty.
+    #[inline]
+    pub(super) fn add_to_last(&mut self, c: Vec3) {
+        self.contribution[self.len - 1] += c;
+    }
+
     /// Adds a contribution and its shadow ray; true when the batch is full.
     #[inline]
-    fn push(&mut self, c: Vec3, s: Option<Segment>) -> bool {
+    pub(super) fn push(&mut self, c: Vec3, s: Option<Segment>) -> bool {
         self.contribution[self.len] = c;
         self.segment[self.len] = s;
         self.len += 1;
@@ -102,7 +151,7 @@ impl ShadowBatch {
     }
 
     /// Traces the batch and adds its visible contributions to `e`, in order.
-    fn flush(&mut self, world: &World, e: &mut Vec3) {
+    pub(super) fn flush(&mut self, world: &World, e: &mut Vec3) {
         let n = std::mem::take(&mut self.len);
         let mut rays = [Segment::default(); BATCH];
         let mut m = 0;
