@@ -277,6 +277,15 @@ fn every_count_flag_has_a_stated_cap() {
         &lgh(&["render", "--bounces", "4000000000"]),
         &["--bounces 4000000000", "64"],
     );
+    assert_error(
+        &lgh(&["render", "--brute-rays", "70000"]),
+        &["--brute-rays 70000", "65536"],
+    );
+    assert_error(&lgh(&["render", "--brute-rays", "0"]), &["--brute-rays 0"]);
+    assert_error(
+        &lgh(&["bench", "quality", "--reference-rays", "70000"]),
+        &["--reference-rays", "70000"],
+    );
     // The numbers of the benchmarks too.
     for args in [
         &["bench", "slc", "--error-bound=nan"][..],
