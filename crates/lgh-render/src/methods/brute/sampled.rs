@@ -184,7 +184,6 @@ impl SortedVpls {
 /// strata take their offsets from the stream (`seed`, i), so the image does not depend on
 /// the thread count.
 #[must_use]
-#[allow(clippy::too_many_arguments)]
 pub fn render_brute_sampled(
     world: &World,
     g: &GBuffer,
