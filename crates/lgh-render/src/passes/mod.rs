@@ -33,13 +33,30 @@ pub fn per_pixel<F>(len: usize, width: usize, progress: &dyn Progress, f: F) -> 
 where
     F: Fn(usize) -> Vec3 + Sync,
 {
+    per_pixel_with(len, width, progress, || (), |(), i| f(i))
+}
+
+/// [`per_pixel`] with scratch space: each worker makes its own with `init` and hands it to
+/// `f` with every pixel it runs. The scratch must not carry a value from one pixel to the
+/// next (only its memory), so that the result stays independent of the thread count.
+pub fn per_pixel_with<S, I, F>(
+    len: usize,
+    width: usize,
+    progress: &dyn Progress,
+    init: I,
+    f: F,
+) -> Vec<Vec3>
+where
+    I: Fn() -> S + Sync + Send,
+    F: Fn(&mut S, usize) -> Vec3 + Sync,
+{
     let mut out = par_filled(len, Vec3::ZERO);
     out.par_chunks_mut(width.max(1))
         .enumerate()
-        .for_each(|(y, row)| {
+        .for_each_init(init, |scratch, (y, row)| {
             let base = y * width;
             for (x, v) in row.iter_mut().enumerate() {
-                *v = f(base + x);
+                *v = f(scratch, base + x);
             }
             progress.advance(1);
         });

@@ -31,12 +31,11 @@ use glam::Vec3;
 use lgh_core::blending::LevelRole;
 use lgh_core::rng::Rng;
 use lgh_core::vpl::Vpls;
-use rayon::prelude::*;
 
 use super::ShadowBatch;
 use crate::methods::lgh::light_batch::{LANES, LightBatch, PackedLight};
 use crate::passes::gbuffer::GBuffer;
-use crate::passes::par_filled;
+use crate::passes::per_pixel_with;
 use crate::progress::Progress;
 use crate::world::World;
 
@@ -194,21 +193,14 @@ pub fn render_brute_sampled(
     progress: &dyn Progress,
 ) -> Vec<Vec3> {
     let sorted = SortedVpls::new(vpls);
-    let width = (g.width as usize).max(1);
-    let mut out = par_filled(g.len(), Vec3::ZERO);
     progress.begin("indirect (brute force, sampled rays)", u64::from(g.height));
-    out.par_chunks_mut(width)
-        .enumerate()
-        .for_each_init(Vec::new, |cdf, (y, row)| {
-            for (x, v) in row.iter_mut().enumerate() {
-                let i = y * width + x;
-                if g.is_hit(i) {
-                    let e = pixel(world, g, i, vpls, &sorted, eps * eps, rays, seed, cdf);
-                    *v = g.albedo[i] * FRAC_1_PI * e;
-                }
-            }
-            progress.advance(1);
-        });
+    let out = per_pixel_with(g.len(), g.width as usize, progress, Vec::new, |cdf, i| {
+        if !g.is_hit(i) {
+            return Vec3::ZERO;
+        }
+        let e = pixel(world, g, i, vpls, &sorted, eps * eps, rays, seed, cdf);
+        g.albedo[i] * FRAC_1_PI * e
+    });
     progress.end();
     out
 }
