@@ -227,17 +227,18 @@ impl Partition {
                 total += b;
                 continue;
             }
-            // The 8 corners' weights and centroids (no light: weight 0), then B_l of all 8
-            // at once without branches (as `LightBatch` evaluates lights).
-            let mut q = [[0.0f32; 8]; 3];
+            // The 8 corners' centroids and weights (no light: weight 0, centroid x), kept as
+            // whole points: scattering them into per-axis lane arrays stored scalars that
+            // the vector loads after them waited on (store forwarding failed), the largest
+            // cost of this function in a profile of the shadow pass.
+            let mut q = [x; 8];
             let mut w = [0.0f32; 8];
             let (wx, wy, wz) = ([1.0 - f.x, f.x], [1.0 - f.y, f.y], [1.0 - f.z, f.z]);
             let mut put = |corner: usize, found: Option<Vec3>| {
-                let p = found.unwrap_or(x);
-                if found.is_some() {
+                if let Some(p) = found {
+                    q[corner] = p;
                     w[corner] = wx[corner & 1] * wy[(corner >> 1) & 1] * wz[corner >> 2];
                 }
-                (q[0][corner], q[1][corner], q[2][corner]) = (p.x, p.y, p.z);
             };
             match self.centroids.get(l as usize - 1) {
                 Some(Centroids::Dense(table)) => {
@@ -277,13 +278,13 @@ impl Partition {
             let (rise_off, fall_off) = role.floors();
             let mut b = [0.0f32; 8];
             for k in 0..8 {
-                let (dx, dy, dz) = (q[0][k] - x.x, q[1][k] - x.y, q[2][k] - x.z);
+                let (dx, dy, dz) = (q[k].x - x.x, q[k].y - x.y, q[k].z - x.z);
                 let t = (dx * dx + dy * dy + dz * dz).sqrt() * inv_r;
                 let rising = (2.0 * t - 1.0).clamp(0.0, 1.0).max(rise_off);
                 let falling = (2.0 - t).clamp(0.0, 1.0).max(fall_off);
                 b[k] = w[k] * rising.min(falling);
             }
-            // Pairwise, so that the lanes above stay independent (vectorised).
+            // Pairwise, in the order of the lanes above.
             total += ((b[0] + b[1]) + (b[2] + b[3])) + ((b[4] + b[5]) + (b[6] + b[7]));
         }
         total
