@@ -22,6 +22,8 @@ struct JumpParams {
     height: u32,
     z_diff: f32,
     n_diff: f32,
+    a_n_diff: f32,
+    _pad: [f32; 3],
 }
 
 /// `Params` of `blur.wgsl`.
@@ -38,7 +40,9 @@ struct BlurUniform {
     plane_count: u32,
     weights: [f32; 20],
     a_diff: f32,
-    _pad: [f32; 3],
+    /// 0: the jumps of `n_diff` (bits 1, 2); 2: those of `a_n_diff` (bits 4, 8).
+    jump_shift: u32,
+    _pad: [f32; 2],
 }
 
 /// `Params` of `blur_keys.wgsl`.
@@ -113,6 +117,8 @@ pub(crate) fn record<'c>(
         height,
         z_diff: first.params.z_diff,
         n_diff: first.params.n_diff,
+        a_n_diff: first.params.a_n_diff.min(first.params.n_diff),
+        _pad: [0.0; 3],
     })?;
     let bind = ctx.bind_group(
         &pipeline,
@@ -158,7 +164,8 @@ pub(crate) fn record<'c>(
                 plane_count: group.count,
                 weights,
                 a_diff: p.a_diff,
-                _pad: [0.0; 3],
+                jump_shift: if p.creases { 2 } else { 0 },
+                _pad: [0.0; 2],
             })?;
             let bind = ctx.bind_group(
                 &pipeline,

@@ -1,7 +1,7 @@
 // One axis of the interleaving blur (lgh-render's shading/interleave, blur_n; LGH 2019
 // section 4.3): per pixel that sees a surface, a Gaussian walk outwards, r taps at most each
 // way, stopping before a step that leaves the image, crosses a jump along the axis
-// (discontinuities.wgsl) or enters a pixel that sees nothing; with n x n interleaving
+// (discontinuities.wgsl; the recombination of A its creases too) or enters a pixel that sees nothing; with n x n interleaving
 // (phases = n > 1) the taps are averaged phase by phase (taps k apart with the same k mod n
 // come from the same sub-image) and the phase means count alike, as balanced_walk on the CPU
 // (which for a full walk equals its phase-normalised convolution). With a_diff > 0 a walk
@@ -26,6 +26,8 @@ struct Params {
     weights: array<vec4<f32>, 5>,
     // The stop on A's key (0: none).
     a_diff: f32,
+    // 0: the jumps of n_diff (bits 1, 2); 2: those of a_n_diff (bits 4, 8).
+    jump_shift: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -67,7 +69,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let pos = select(i % w, i / w, vertical);
     let len = select(w, params.height, vertical);
     let step = select(1u, w, vertical);
-    let bit = select(1u, 2u, vertical);
+    let bit = select(1u, 2u, vertical) << params.jump_shift;
     // The walk's length each way.
     var fwd = 0u;
     var at = i;

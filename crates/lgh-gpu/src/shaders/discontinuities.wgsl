@@ -2,13 +2,18 @@
 // per pixel, bit 1 if it jumps to its neighbour at (1, 0), bit 2 to the one at (0, 1): exactly
 // one of the two sees a surface, or the depth differs by more than z_diff times the local
 // depth slope (the larger over the axes of the smaller one-sided difference to a neighbour
-// that sees a surface), or the normals by more than n_diff in 1 - n . n'.
+// that sees a surface), or the normals by more than n_diff in 1 - n . n'; and bits 4 and 8
+// the same with a_n_diff for the normals (the recombination of A).
 
 struct Params {
     width: u32,
     height: u32,
     z_diff: f32,
     n_diff: f32,
+    a_n_diff: f32,
+    _p0: f32,
+    _p1: f32,
+    _p2: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -38,17 +43,22 @@ fn slope(i: u32, a: u32, a_ok: bool, b: u32, b_ok: bool) -> f32 {
     return s;
 }
 
-fn jump(i: u32, j: u32, scale: f32) -> bool {
+// The bits of the pair (i, j): `wide | crease` for a jump, `crease` for a normal change
+// above a_n_diff only, else 0.
+fn jump(i: u32, j: u32, scale: f32, wide: u32, crease: u32) -> u32 {
     let hi = hit(i);
     if (hi != hit(j)) {
-        return true;
+        return wide | crease;
     }
     if (!hi) {
-        return false;
+        return 0u;
     }
     let dz = abs(depth(j) - depth(i)) / scale;
     let dn = 1.0 - dot(gbuffer[i].normal.xyz, gbuffer[j].normal.xyz);
-    return dz > params.z_diff || dn > params.n_diff;
+    if (dz > params.z_diff || dn > params.n_diff) {
+        return wide | crease;
+    }
+    return select(0u, crease, dn > params.a_n_diff);
 }
 
 @compute @workgroup_size(64)
@@ -69,11 +79,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         scale = max(max(fx, fy), 1e-4);
     }
     var flags = 0u;
-    if (x + 1u < w && jump(i, i + 1u, scale)) {
-        flags |= 1u;
+    if (x + 1u < w) {
+        flags |= jump(i, i + 1u, scale, 1u, 4u);
     }
-    if (y + 1u < params.height && jump(i, i + w, scale)) {
-        flags |= 2u;
+    if (y + 1u < params.height) {
+        flags |= jump(i, i + w, scale, 2u, 8u);
     }
     jumps[i] = flags;
 }

@@ -107,7 +107,12 @@ pub fn composite(g: &GBuffer, a: &[Vec3], ratio: &[Vec3]) -> Vec<Vec3> {
 /// The blur's discontinuities of `g` with `p`'s thresholds, kept in `memory` while the view
 /// stands still.
 fn discontinuities<'m>(g: &GBuffer, p: &BlurParams, memory: &'m mut FrameMemory) -> &'m [u8] {
-    let key = [p.z_diff.to_bits(), p.n_diff.to_bits(), 0, 0];
+    let key = [
+        p.z_diff.to_bits(),
+        p.n_diff.to_bits(),
+        p.a_n_diff.to_bits(),
+        0,
+    ];
     memory
         .discontinuities
         .get_or_insert_with(g, key, || interleave::discontinuities(g, p))

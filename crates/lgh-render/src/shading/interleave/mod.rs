@@ -143,6 +143,15 @@ pub struct BlurParams {
     /// taps of the open wall set the corner's ratio (docs/design.md, "Interleaved
     /// sampling").
     pub a_diff: f32,
+    /// Normal discontinuity of the recombination of A: 1 - n . n' above this (at most
+    /// `n_diff`). The unshadowed sum follows the normal closely (a cosine), so at a crease
+    /// of 20-60 degrees, which `n_diff` lets the wide blur of S and U cross, the
+    /// recombination would average two faces' light (docs/design.md, "Interleaved
+    /// sampling").
+    pub a_n_diff: f32,
+    /// Walk to the jumps of [`BlurParams::a_n_diff`] ([`JUMP_X_A`], [`JUMP_Y_A`]) instead of
+    /// those of `n_diff`: the recombination of A ([`BlurParams::recombination`]).
+    pub creases: bool,
 }
 
 impl BlurParams {
@@ -156,6 +165,8 @@ impl BlurParams {
             n_diff: 0.5,
             phases: 1,
             a_diff: 0.05,
+            a_n_diff: 0.05,
+            creases: false,
         }
     }
 
@@ -164,13 +175,24 @@ impl BlurParams {
     /// the same weight 1 / n^2 (at n = 4 the taps weigh (1/2, 1, 1, 1, 1/2) / 4 per axis).
     /// Every light then counts once, evaluated at the pixel of its own sub-image within the
     /// n x n window, and the image keeps its detail below the wide blur's 17 pixels
-    /// (docs/design.md, "Interleaved sampling"). A itself is blurred without the stop on A.
+    /// (docs/design.md, "Interleaved sampling"). A itself is blurred without the stop on A,
+    /// and its walks stop at the creases of [`BlurParams::a_n_diff`] as well.
     #[must_use]
     pub fn recombination(&self) -> Self {
         Self {
             radius: (self.phases / 2).max(1),
             a_diff: 0.0,
+            creases: true,
             ..*self
+        }
+    }
+
+    /// The jump bits along x and y that this blur's walks stop at.
+    fn jump_bits(&self) -> (u8, u8) {
+        if self.creases {
+            (JUMP_X_A, JUMP_Y_A)
+        } else {
+            (JUMP_X, JUMP_Y)
         }
     }
 }
@@ -178,7 +200,8 @@ impl BlurParams {
 /// A jump between a pixel and its neighbour at (1, 0) ([`JUMP_X`]) and at (0, 1)
 /// ([`JUMP_Y`]), one bit each per pixel: the depth jumps by more than `z_diff` times the local
 /// depth gradient, or the normals differ by more than `n_diff` in 1 - n . n', or exactly one
-/// of the two sees a surface. Kept per axis, so that a walk along an edge (between pixels on
+/// of the two sees a surface; and the same with `a_n_diff` for the normals ([`JUMP_X_A`],
+/// [`JUMP_Y_A`], the recombination of A). Kept per axis, so that a walk along an edge (between pixels on
 /// the same side) is not stopped by the jump across it: a pixel on a vertical edge still
 /// blurs up and down, and every sub-image of the interleaving reaches it (docs/design.md,
 /// "Interleaved sampling").
@@ -209,23 +232,31 @@ pub fn discontinuities(g: &GBuffer, p: &BlurParams) -> Vec<u8> {
             } else {
                 1.0
             };
-            let jump = |j: usize| {
+            let a_n_diff = p.a_n_diff.min(p.n_diff);
+            // The bits of the pair (i, j): [`JUMP_X`] or [`JUMP_Y`] (`wide`), and `crease`.
+            let jump = |j: usize, wide: u8, crease: u8| {
                 if hit != g.is_hit(j) {
-                    return true;
+                    return wide | crease;
                 }
                 if !hit {
-                    return false;
+                    return 0;
                 }
                 let dz = (g.depth[j] - g.depth[i]).abs() / scale;
                 let dn = 1.0 - g.normal[i].dot(g.normal[j]);
-                dz > p.z_diff || dn > p.n_diff
+                if dz > p.z_diff || dn > p.n_diff {
+                    wide | crease
+                } else if dn > a_n_diff {
+                    crease
+                } else {
+                    0
+                }
             };
             let mut flags = 0;
-            if x + 1 < w && jump(i + 1) {
-                flags |= JUMP_X;
+            if x + 1 < w {
+                flags |= jump(i + 1, JUMP_X, JUMP_X_A);
             }
-            if y + 1 < h && jump(i + w) {
-                flags |= JUMP_Y;
+            if y + 1 < h {
+                flags |= jump(i + w, JUMP_Y, JUMP_Y_A);
             }
             flags
         })
@@ -256,6 +287,11 @@ fn stop_at_keys(keys: &[f32], w: usize, limit: f32, walks: [&mut [u8]; 4]) {
 pub const JUMP_X: u8 = 1;
 /// [`discontinuities`] bit: a jump to the neighbour at (0, 1).
 pub const JUMP_Y: u8 = 2;
+/// [`discontinuities`] bit: a jump to the neighbour at (1, 0) for the recombination of A
+/// (normals compared with [`BlurParams::a_n_diff`]).
+pub const JUMP_X_A: u8 = 4;
+/// [`discontinuities`] bit: a jump to the neighbour at (0, 1) for the recombination of A.
+pub const JUMP_Y_A: u8 = 8;
 
 /// Separable Gaussian blur that walks outwards from each pixel and stops before the first
 /// jump along its axis ([`discontinuities`]; the pixel itself always counts); weights are
@@ -295,8 +331,9 @@ pub fn blur_n_keyed<const N: usize>(
         .collect();
     // How far the walk goes from each pixel, per direction: it stops before a step that
     // leaves the image, crosses a jump along its axis, or enters a pixel that sees nothing. Known before the sums, the taps need no tests.
-    let (mut right, mut left) = runs(g, disc, r, false);
-    let (mut down, mut up) = runs(g, disc, r, true);
+    let (bit_x, bit_y) = p.jump_bits();
+    let (mut right, mut left) = runs(g, disc, r, bit_x, false);
+    let (mut down, mut up) = runs(g, disc, r, bit_y, true);
     if let Some(keys) = keys.filter(|_| p.a_diff > 0.0) {
         stop_at_keys(
             keys,
@@ -457,13 +494,12 @@ const VERTICAL_BLOCK_ROWS: usize = 32;
 
 /// Steps of the blur's walk from every pixel along x (`vertical` false) or y, at most `r`:
 /// forwards and backwards. A step from i to j = i +- 1 pixel is allowed if j is in the image
-/// and sees a surface and the pair has no jump along the axis (the bit of the pair's first
+/// and sees a surface and the pair has no jump along the axis (`bit` of the pair's first
 /// pixel).
 /// Each run extends its neighbour's by one step, so one sweep per direction finds them all.
-fn runs(g: &GBuffer, disc: &[u8], r: usize, vertical: bool) -> (Vec<u8>, Vec<u8>) {
+fn runs(g: &GBuffer, disc: &[u8], r: usize, bit: u8, vertical: bool) -> (Vec<u8>, Vec<u8>) {
     let (w, h) = (g.width as usize, g.height as usize);
     let r = r.min(usize::from(u8::MAX)) as u8;
-    let bit = if vertical { JUMP_Y } else { JUMP_X };
     let (mut fwd, mut back) = (vec![0u8; w * h], vec![0u8; w * h]);
     let step = |from: usize, to: usize, from_run: u8| -> u8 {
         if disc[from.min(to)] & bit == 0 && g.is_hit(to) {

@@ -138,6 +138,52 @@ fn the_recombination_counts_every_sub_image_once_within_n_pixels() {
     assert_eq!(reach(&wide), Some(8));
 }
 
+/// Two faces of one depth meeting at a vertical crease of 35 degrees (1 - n . n' = 0.18,
+/// under the wide blur's `n_diff` 0.5, over `a_n_diff` 0.05), each face's unshadowed sum A
+/// a constant under 2 x 2 interleaving: the recombination of A keeps every pixel at its
+/// own face's value (the pixels along the crease too, whose walks are cut on one side),
+/// where with `a_n_diff` at `n_diff` (before 2026-12-06) the two columns along the crease
+/// took the other face's light. The wide blur of S and U still walks across the crease.
+#[test]
+fn the_recombination_of_a_stops_at_creases() {
+    let (w, h, split, n) = (24u32, 10u32, 11u32, 2u32);
+    let mut g = two_planes(w, h, split);
+    let turned = Vec3::new(35f32.to_radians().sin(), 0.0, 35f32.to_radians().cos());
+    for (i, (d, nrm)) in g.depth.iter_mut().zip(g.normal.iter_mut()).enumerate() {
+        *d = 1.0;
+        if (i as u32 % w) >= split {
+            *nrm = turned;
+        }
+    }
+    let face = |x: u32| if x < split { 1.0 } else { 3.0 };
+    let img: Vec<Vec3> = (0..(w * h) as usize)
+        .map(|i| Vec3::splat(face(i as u32 % w)))
+        .collect();
+    let p = BlurParams {
+        phases: n,
+        ..BlurParams::defaults()
+    };
+    let out = blur(&img, &g, &discontinuities(&g, &p), &p.recombination());
+    for (i, v) in out.iter().enumerate() {
+        let x = i as u32 % w;
+        assert!((v.x - face(x)).abs() < 1e-5, "pixel {i} (x {x}): {v}");
+    }
+    let old = BlurParams {
+        a_n_diff: p.n_diff,
+        ..p
+    };
+    let mixed = blur(&img, &g, &discontinuities(&g, &old), &old.recombination());
+    let at = (3 * w + split) as usize;
+    assert!(
+        mixed[at].x < 2.9 && mixed[at - 1].x > 1.1,
+        "{} {}",
+        mixed[at - 1],
+        mixed[at]
+    );
+    let wide = blur(&img, &g, &discontinuities(&g, &p), &p);
+    assert!(wide[at].x < 2.9, "{}", wide[at]);
+}
+
 /// A 4 x 4 interleaved image whose sub-images hold different constants, on two planes
 /// with a vertical depth edge: after the blur every pixel, those along the edge too,
 /// holds the mean of all sub-images within 2% (no comb along the edge: the walk along
