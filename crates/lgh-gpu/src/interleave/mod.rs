@@ -117,7 +117,7 @@ pub(crate) fn record<'c>(
         height,
         z_diff: first.params.z_diff,
         n_diff: first.params.n_diff,
-        a_n_diff: first.params.a_n_diff.min(first.params.n_diff),
+        a_n_diff: first.params.crease_n_diff(),
         _pad: [0.0; 3],
     })?;
     let bind = ctx.bind_group(

@@ -1,14 +1,14 @@
 // One axis of the interleaving blur (lgh-render's shading/interleave, blur_n; LGH 2019
 // section 4.3): per pixel that sees a surface, a Gaussian walk outwards, r taps at most each
 // way, stopping before a step that leaves the image, crosses a jump along the axis
-// (discontinuities.wgsl; the recombination of A its creases too) or enters a pixel that sees nothing; with n x n interleaving
-// (phases = n > 1) the taps are averaged phase by phase (taps k apart with the same k mod n
-// come from the same sub-image) and the phase means count alike, as balanced_walk on the CPU
-// (which for a full walk equals its phase-normalised convolution). With a_diff > 0 a walk
-// also stops before a pixel whose key (ln lum A, blur_keys.wgsl) differs from the centre's
-// by more than a_diff (blur_n_keyed on the CPU). Pixels that see nothing
-// keep their values; w components pass through. Images: `planes` vec4s per pixel, this pass
-// blurs planes plane_first .. plane_first + plane_count.
+// (discontinuities.wgsl; the recombination of A its creases too, jump_shift 2) or enters a
+// pixel that sees nothing; with n x n interleaving (phases = n > 1) the taps are averaged
+// phase by phase (taps k apart with the same k mod n come from the same sub-image) and the
+// phase means count alike, as balanced_walk on the CPU (which for a full walk equals its
+// phase-normalised convolution). With a_diff > 0 a walk also stops before a pixel whose key
+// (ln lum A, blur_keys.wgsl) differs from the centre's by more than a_diff (blur_n_keyed on
+// the CPU). Pixels that see nothing keep their values; w components pass through. Images:
+// `planes` vec4s per pixel, this pass blurs planes plane_first .. plane_first + plane_count.
 
 const MAX_PHASES: u32 = 16u;
 

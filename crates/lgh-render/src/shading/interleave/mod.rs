@@ -187,6 +187,13 @@ impl BlurParams {
         }
     }
 
+    /// The normal threshold of the crease bits: [`BlurParams::a_n_diff`], at most `n_diff`
+    /// (a jump for the wide blur is one for A's recombination too).
+    #[must_use]
+    pub fn crease_n_diff(&self) -> f32 {
+        self.a_n_diff.min(self.n_diff)
+    }
+
     /// The jump bits along x and y that this blur's walks stop at.
     fn jump_bits(&self) -> (u8, u8) {
         if self.creases {
@@ -200,14 +207,15 @@ impl BlurParams {
 /// A jump between a pixel and its neighbour at (1, 0) ([`JUMP_X`]) and at (0, 1)
 /// ([`JUMP_Y`]), one bit each per pixel: the depth jumps by more than `z_diff` times the local
 /// depth gradient, or the normals differ by more than `n_diff` in 1 - n . n', or exactly one
-/// of the two sees a surface; and the same with `a_n_diff` for the normals ([`JUMP_X_A`],
-/// [`JUMP_Y_A`], the recombination of A). Kept per axis, so that a walk along an edge (between pixels on
-/// the same side) is not stopped by the jump across it: a pixel on a vertical edge still
-/// blurs up and down, and every sub-image of the interleaving reaches it (docs/design.md,
-/// "Interleaved sampling").
+/// of the two sees a surface; and the same with [`BlurParams::crease_n_diff`] for the
+/// normals ([`JUMP_X_A`], [`JUMP_Y_A`], the recombination of A). Kept per axis, so that a
+/// walk along an edge (between pixels on the same side) is not stopped by the jump across
+/// it: a pixel on a vertical edge still blurs up and down, and every sub-image of the
+/// interleaving reaches it (docs/design.md, "Interleaved sampling").
 #[must_use]
 pub fn discontinuities(g: &GBuffer, p: &BlurParams) -> Vec<u8> {
     let (w, h) = (g.width as usize, g.height as usize);
+    let crease_n_diff = p.crease_n_diff();
     (0..w * h)
         .into_par_iter()
         .map(|i| {
@@ -232,7 +240,6 @@ pub fn discontinuities(g: &GBuffer, p: &BlurParams) -> Vec<u8> {
             } else {
                 1.0
             };
-            let a_n_diff = p.a_n_diff.min(p.n_diff);
             // The bits of the pair (i, j): [`JUMP_X`] or [`JUMP_Y`] (`wide`), and `crease`.
             let jump = |j: usize, wide: u8, crease: u8| {
                 if hit != g.is_hit(j) {
@@ -245,7 +252,7 @@ pub fn discontinuities(g: &GBuffer, p: &BlurParams) -> Vec<u8> {
                 let dn = 1.0 - g.normal[i].dot(g.normal[j]);
                 if dz > p.z_diff || dn > p.n_diff {
                     wide | crease
-                } else if dn > a_n_diff {
+                } else if dn > crease_n_diff {
                     crease
                 } else {
                     0
