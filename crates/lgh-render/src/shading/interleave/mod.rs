@@ -295,7 +295,7 @@ pub const JUMP_X: u8 = 1;
 /// [`discontinuities`] bit: a jump to the neighbour at (0, 1).
 pub const JUMP_Y: u8 = 2;
 /// [`discontinuities`] bit: a jump to the neighbour at (1, 0) for the recombination of A
-/// (normals compared with [`BlurParams::a_n_diff`]).
+/// (normals compared with [`BlurParams::crease_n_diff`]).
 pub const JUMP_X_A: u8 = 4;
 /// [`discontinuities`] bit: a jump to the neighbour at (0, 1) for the recombination of A.
 pub const JUMP_Y_A: u8 = 8;
