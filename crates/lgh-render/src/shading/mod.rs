@@ -3,7 +3,7 @@
 //!
 //! | module | what it does |
 //! | --- | --- |
-//! | [`tiles`] | screen-tile binning of light volumes, per sub-image |
+//! | [`tiles`] | screen-tile binning of light volumes, per sub-image (what each tile sees: `tile_bounds`) |
 //! | [`interleave`] | interleaved sampling: sub-image lattices, split/merge, the discontinuity-aware blur |
 //! | [`reservoirs`] | the k shadow-sample reservoirs a pixel keeps while it is shaded (LGH Appendix A) |
 //! | [`strata`] | screen-space dithered strata for the stratified selection |
@@ -15,4 +15,5 @@ pub mod ratio;
 pub mod reservoirs;
 pub mod shadow_pass;
 pub mod strata;
+mod tile_bounds;
 pub mod tiles;

@@ -10,12 +10,14 @@
 //! test.) Lists keep the lights' order, so shading that walks them is deterministic. One
 //! binning module serves every tiled method.
 
-use glam::{BVec4A, Vec3, Vec4};
+use glam::Vec3;
 use lgh_scene::camera::CameraFrame;
 use rayon::prelude::*;
 
 use crate::passes::gbuffer::GBuffer;
 use crate::shading::interleave::Lattice;
+use crate::shading::tile_bounds::TileBounds;
+pub use crate::shading::tile_bounds::{AllBounds, DEPTH_SLICES, GROUP};
 
 /// Lights binned into screen tiles, as a compressed sparse row table.
 #[derive(Clone, Debug, Default)]
@@ -124,13 +126,24 @@ impl TileBins {
                     let (lo, hi) = depth(i);
                     let m = facing.get(i).copied().unwrap_or(Vec3::ZERO);
                     let hole = holes.get(i).copied().unwrap_or(0.0);
-                    for ty in y0 / tile..=y1 / tile {
-                        for tx in x0 / tile..=x1 / tile {
-                            if all
-                                .get(s, tx, ty)
-                                .may_reach(lo, hi, centres[i], radii[i], m, hole)
-                            {
-                                pairs.push((ty * tiles_x + tx, i as u32));
+                    let (tx0, tx1, ty0, ty1) = (x0 / tile, x1 / tile, y0 / tile, y1 / tile);
+                    let reach = |b: &TileBounds| b.may_reach(lo, hi, centres[i], radii[i], m, hole);
+                    // Group by group, each tested first where it holds more than one of
+                    // the rectangle's tiles (a group that rejects the light rejects them all).
+                    for gy in ty0 / GROUP..=ty1 / GROUP {
+                        let rows = ty0.max(gy * GROUP)..=ty1.min(gy * GROUP + GROUP - 1);
+                        for gx in tx0 / GROUP..=tx1 / GROUP {
+                            let cols = tx0.max(gx * GROUP)..=tx1.min(gx * GROUP + GROUP - 1);
+                            let several = rows.clone().count() * cols.clone().count() > 1;
+                            if several && !reach(all.group(s, gx, gy)) {
+                                continue;
+                            }
+                            for ty in rows.clone() {
+                                for tx in cols.clone() {
+                                    if reach(all.get(s, tx, ty)) {
+                                        pairs.push((ty * tiles_x + tx, i as u32));
+                                    }
+                                }
                             }
                         }
                     }
@@ -162,211 +175,8 @@ impl TileBins {
     }
 }
 
-/// For pixels (0, y), (1, y), ... (`width` of them) under n x n interleaving with tiles of
-/// `tile` full-resolution pixels: the column phase x mod n, the sub-image and the tile
-/// column x / tile, found by counting instead of dividing.
-fn row_phases(
-    y: u32,
-    width: u32,
-    n: u32,
-    tile: u32,
-) -> impl Iterator<Item = (usize, usize, usize)> {
-    let s0 = ((y % n) * n) as usize;
-    // (x mod n, x mod tile, x / tile)
-    (0..width).scan((0u32, 0u32, 0usize), move |(phase, in_tile, tx), _| {
-        let out = (*phase as usize, s0 + *phase as usize, *tx);
-        *phase += 1;
-        if *phase == n {
-            *phase = 0;
-        }
-        *in_tile += 1;
-        if *in_tile == tile {
-            *in_tile = 0;
-            *tx += 1;
-        }
-        Some(out)
-    })
-}
-
 /// Lights per task of the binning.
 const BIN_CHUNK: usize = 4096;
-
-/// What every tile of every sub-image of n x n interleaving (n = 1: the image) sees: its
-/// depth range and, per depth slice, the box and normal cone of its surface points. Found
-/// in one pass over the G-buffer, in parallel over rows of tiles; it depends on the
-/// G-buffer alone, so a caller may keep it while the view stands still
-/// ([`crate::memory::ViewCache`]).
-#[derive(Debug)]
-pub struct AllBounds {
-    /// Tile edge in full-resolution pixels.
-    tile: u32,
-    tiles_x: u32,
-    tiles_y: u32,
-    n: u32,
-    n2: usize,
-    /// Tile (tx, ty) of sub-image s is entry (ty n^2 + s) tiles_x + tx.
-    bounds: Vec<TileBounds>,
-}
-
-impl AllBounds {
-    /// The bounds of G-buffer `g` under n x n interleaving, with tiles of `tile`
-    /// full-resolution pixels.
-    #[must_use]
-    pub fn new(g: &GBuffer, n: u32, tile: u32) -> Self {
-        let tiles_x = g.width.div_ceil(tile);
-        let tiles_y = g.height.div_ceil(tile);
-        let n2 = (n * n) as usize;
-        let mut bounds = vec![TileBounds::EMPTY; tiles_y as usize * n2 * tiles_x as usize];
-        bounds
-            .par_chunks_mut(n2 * tiles_x as usize)
-            .enumerate()
-            .for_each(|(ty, row)| {
-                let ys = ty as u32 * tile..((ty as u32 + 1) * tile).min(g.height);
-                // Pixel (x, y) of the row of tiles is in entry k of `row` (sub-image s, tile
-                // tx), counted along x instead of divided.
-                let visit = |f: &mut dyn FnMut(usize, usize)| {
-                    for y in ys.clone() {
-                        let start = (y * g.width) as usize;
-                        for (i, (_, s, tx)) in (start..).zip(row_phases(y, g.width, n, tile)) {
-                            if g.is_hit(i) {
-                                f(s * tiles_x as usize + tx, i);
-                            }
-                        }
-                    }
-                };
-                visit(&mut |k, i| {
-                    row[k].zmin = row[k].zmin.min(g.depth[i]);
-                    row[k].zmax = row[k].zmax.max(g.depth[i]);
-                });
-                visit(&mut |k, i| row[k].add(g.depth[i], g.position[i], g.normal[i]));
-            });
-        Self {
-            tile,
-            tiles_x,
-            tiles_y,
-            n,
-            n2,
-            bounds,
-        }
-    }
-
-    /// Tile (`tx`, `ty`) of sub-image `s`.
-    #[inline]
-    fn get(&self, s: usize, tx: u32, ty: u32) -> &TileBounds {
-        &self.bounds[(ty as usize * self.n2 + s) * self.tiles_x as usize + tx as usize]
-    }
-}
-
-/// Depth slices of a tile's range that get their own bounding box of surface points (the
-/// lanes of a `Vec4`): a tile that sees a column in front of a far wall then does not list
-/// the lights in between. A sphere's screen rectangle and depth range bound its box, about
-/// twice its volume, so without the boxes about half the listed lights never reach a pixel;
-/// four slices list about 1.6 lights per reaching light, eight gain no more (docs/design.md,
-/// "Tile binning").
-pub const DEPTH_SLICES: usize = 4;
-
-/// Relative rounding allowance of the tangent-plane test: n . c - n . x and n . (c - x)
-/// differ by a few float epsilons of |c| + |x|.
-const ROUNDING: f32 = 1e-5;
-
-/// What a tile sees: the depth range of its surface points and, per slice of that range, the
-/// bounding box of the points in it, stored axis by axis with the slices in SIMD lanes (an
-/// empty box has lo = +inf and hi = -inf, so that nothing is near it); and per slice a cone
-/// of the points' shading normals n_x (the first point's normal n_s and the largest
-/// |n_x - n_s|) with the lowest n_s . x of its points, which tells the lights that every
-/// point of the slice sees behind its tangent plane.
-#[derive(Clone, Copy, Debug)]
-struct TileBounds {
-    zmin: f32,
-    zmax: f32,
-    lo: [[f32; DEPTH_SLICES]; 3],
-    hi: [[f32; DEPTH_SLICES]; 3],
-    /// n_s per axis (zero for an empty slice).
-    normal: [[f32; DEPTH_SLICES]; 3],
-    /// The largest |n_x - n_s|.
-    spread: [f32; DEPTH_SLICES],
-    /// The lowest n_s . x.
-    plane: [f32; DEPTH_SLICES],
-}
-
-impl TileBounds {
-    const EMPTY: Self = Self {
-        zmin: f32::INFINITY,
-        zmax: f32::NEG_INFINITY,
-        lo: [[f32::INFINITY; DEPTH_SLICES]; 3],
-        hi: [[f32::NEG_INFINITY; DEPTH_SLICES]; 3],
-        normal: [[0.0; DEPTH_SLICES]; 3],
-        spread: [0.0; DEPTH_SLICES],
-        plane: [f32::INFINITY; DEPTH_SLICES],
-    };
-
-    /// Adds a surface point at depth `z` (within the depth range, set before) with shading
-    /// normal `n` to its slice.
-    fn add(&mut self, z: f32, p: Vec3, n: Vec3) {
-        let span = self.zmax - self.zmin;
-        let k = if span > 0.0 {
-            (((z - self.zmin) / span * DEPTH_SLICES as f32) as usize).min(DEPTH_SLICES - 1)
-        } else {
-            0
-        };
-        if self.lo[0][k] > self.hi[0][k] {
-            // The slice's first point sets its normal.
-            for a in 0..3 {
-                self.normal[a][k] = n[a];
-            }
-        }
-        for (a, v) in p.to_array().into_iter().enumerate() {
-            self.lo[a][k] = self.lo[a][k].min(v);
-            self.hi[a][k] = self.hi[a][k].max(v);
-        }
-        let ns = Vec3::new(self.normal[0][k], self.normal[1][k], self.normal[2][k]);
-        self.spread[k] = self.spread[k].max((n - ns).length());
-        self.plane[k] = self.plane[k].min(ns.dot(p));
-    }
-
-    /// False only if no surface point of the tile can lie in the sphere (`c`, `r`) of depth
-    /// range [`lo`, `hi`] in front of its tangent plane: the ranges do not meet, or in every
-    /// slice the sphere misses the box, or `c` lies behind every point's tangent plane
-    /// (n_x . (c - x) <= 0 for every point x of the slice, whose light is then zero: bounded
-    /// by n_s . c - min n_s . x + max |n_x - n_s| |c - x|), or, for a light with emission
-    /// normal `m` not zero, every point lies behind the light's plane (m . (x - c) <= 0), or
-    /// every point lies within `hole` of `c` ([`BinLights::holes`]).
-    #[inline]
-    fn may_reach(&self, lo: f32, hi: f32, c: Vec3, r: f32, m: Vec3, hole: f32) -> bool {
-        if self.zmin > hi || self.zmax < lo {
-            return false;
-        }
-        // Squared distances from c to each box, nearest and farthest, and n_s . c, four
-        // boxes at once.
-        let (mut d2, mut far2, mut nc) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
-        // The greatest m . (x - c) over each box.
-        let mut front = Vec4::ZERO;
-        for (a, ca) in c.to_array().into_iter().enumerate() {
-            let ca = Vec4::splat(ca);
-            let (lo, hi) = (Vec4::from_array(self.lo[a]), Vec4::from_array(self.hi[a]));
-            let d = (lo - ca).max(ca - hi).max(Vec4::ZERO);
-            d2 += d * d;
-            let f = (ca - lo).abs().max((hi - ca).abs());
-            far2 += f * f;
-            nc += Vec4::from_array(self.normal[a]) * ca;
-            let ma = Vec4::splat(m[a]);
-            front += ((lo - ca) * ma).max((hi - ca) * ma);
-        }
-        // The bound less a rounding allowance, so that a light the shading would give a
-        // grazing, non-zero cosine is kept whatever the tile size.
-        let far = far2.sqrt();
-        let allowance = (Vec4::splat(c.length()) + far) * ROUNDING;
-        let behind =
-            (nc - Vec4::from_array(self.plane) + Vec4::from_array(self.spread) * far + allowance)
-                .cmple(Vec4::ZERO);
-        // Behind the light's own plane (m . (x - c) <= 0 over the whole box), where a light
-        // that emits only in front of it gives nothing.
-        let unlit = (front + allowance).cmple(Vec4::ZERO) & BVec4A::splat(m != Vec3::ZERO);
-        // Within the hole, where the light gives nothing.
-        let inside = (far + allowance).cmplt(Vec4::splat(hole));
-        (d2.cmple(Vec4::splat(r * r)) & !behind & !unlit & !inside).any()
-    }
-}
 
 /// The lights a binning lists: spheres of influence, and where else each gives nothing.
 #[derive(Clone, Copy, Debug, Default)]
@@ -615,7 +425,10 @@ mod tests {
         let (w, h) = (16u32, 8u32);
         let (g, frame) = flat_view(w, h);
         let count = 37;
-        let centres: Vec<Vec3> = (0..count).map(|i| Vec3::splat(i as f32 * 0.01)).collect();
+        // In front of the plane the pixels see (a light on it lights none of them).
+        let centres: Vec<Vec3> = (0..count)
+            .map(|i| Vec3::splat((i + 1) as f32 * 0.01))
+            .collect();
         let radii = vec![f32::INFINITY; count];
         for n in [1u32, 2, 4] {
             let sub: Vec<u16> = (0..count).map(|i| (i % (n * n) as usize) as u16).collect();

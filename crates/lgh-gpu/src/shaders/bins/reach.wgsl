@@ -79,21 +79,17 @@ fn light_span(i: u32) -> Span {
 // False only if no surface point of the tile of bounds `b` can lie in light i's sphere in
 // front of its tangent plane and, for a light with normal m, in front of the light's own
 // plane, and farther than `hole` from it (lgh-render's TileBounds::may_reach).
-// A light of infinite reach is kept by an empty tile and by a tile with an empty slice, as
-// the CPU's infinities keep it, and otherwise only by the tangent-plane test.
+// An empty tile or slice holds no point and keeps no light, whatever its reach.
 fn may_reach(b: TileBounds, s: Span, c: vec3<f32>, r: f32, m: vec3<f32>, hole: f32) -> bool {
     let facing = any(m != vec3<f32>(0.0));
     if (b.z.z == 0.0) {
-        return s.everywhere;
+        return false;
     }
     if (!s.everywhere && (b.z.x > s.z.y || b.z.y < s.z.x)) {
         return false;
     }
     for (var k = 0u; k < SLICES; k++) {
         if (b.lo[k].w == 0.0) {
-            if (s.everywhere) {
-                return true;
-            }
             continue;
         }
         let lo = b.lo[k].xyz;
