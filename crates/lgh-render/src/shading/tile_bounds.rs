@@ -18,7 +18,7 @@ pub const GROUP: u32 = 4;
 /// G-buffer alone, so a caller may keep it while the view stands still
 /// ([`crate::memory::ViewCache`]).
 ///
-/// Beside the tiles it keeps their groups of [`GROUP`] x [`GROUP`] ([`AllBounds::group`]):
+/// Beside the tiles it keeps their groups of [`GROUP`] x [`GROUP`] (`AllBounds::group`):
 /// per group the depth range of its tiles and, in the four lanes, the box of each quadrant's
 /// tiles (2 x 2 tiles), without normal cones. A light that may reach a point of a tile may
 /// reach the tile's group by the same test (each of its bounds is at least as wide, and the
