@@ -162,11 +162,9 @@ impl TileBounds {
         plane: [f32::INFINITY; DEPTH_SLICES],
     };
 
-    /// An empty group: no points, and no normal cones (n_s = 0 with the lowest n_s . x at
+    /// An empty group: no points, and no normal cones (n_s stays 0 and the lowest n_s . x is
     /// -inf, so that no light is behind a group's points).
     const GROUP_EMPTY: Self = Self {
-        normal: [[0.0; DEPTH_SLICES]; 3],
-        spread: [0.0; DEPTH_SLICES],
         plane: [f32::NEG_INFINITY; DEPTH_SLICES],
         ..Self::EMPTY
     };
