@@ -74,6 +74,16 @@ impl AllBounds {
             });
         let groups_x = tiles_x.div_ceil(GROUP);
         let groups_y = tiles_y.div_ceil(GROUP);
+        let mut all = Self {
+            tile,
+            tiles_x,
+            tiles_y,
+            n,
+            n2,
+            bounds,
+            groups_x,
+            groups: Vec::new(),
+        };
         let mut groups = vec![TileBounds::GROUP_EMPTY; groups_y as usize * n2 * groups_x as usize];
         groups
             .par_chunks_mut(n2 * groups_x as usize)
@@ -86,23 +96,13 @@ impl AllBounds {
                         for tx in gx * GROUP..((gx + 1) * GROUP).min(tiles_x) {
                             let quadrant = usize::from(ty - gy * GROUP >= GROUP / 2) * 2
                                 + usize::from(tx - gx * GROUP >= GROUP / 2);
-                            let t =
-                                &bounds[(ty as usize * n2 + s) * tiles_x as usize + tx as usize];
-                            group.merge(quadrant, t);
+                            group.merge(quadrant, all.get(s, tx, ty));
                         }
                     }
                 }
             });
-        Self {
-            tile,
-            tiles_x,
-            tiles_y,
-            n,
-            n2,
-            bounds,
-            groups_x,
-            groups,
-        }
+        all.groups = groups;
+        all
     }
 
     /// Tile (`tx`, `ty`) of sub-image `s`.

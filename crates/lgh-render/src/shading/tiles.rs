@@ -134,7 +134,7 @@ impl TileBins {
                         let rows = ty0.max(gy * GROUP)..=ty1.min(gy * GROUP + GROUP - 1);
                         for gx in tx0 / GROUP..=tx1 / GROUP {
                             let cols = tx0.max(gx * GROUP)..=tx1.min(gx * GROUP + GROUP - 1);
-                            let several = rows.clone().count() * cols.clone().count() > 1;
+                            let several = rows.start() != rows.end() || cols.start() != cols.end();
                             if several && !reach(all.group(s, gx, gy)) {
                                 continue;
                             }
