@@ -1,6 +1,6 @@
 //! The interleaving blur on the GPU (`shaders/discontinuities.wgsl`, `shaders/blur.wgsl`,
 //! `shaders/blur_keys.wgsl`): lgh-render's `shading::interleave::{discontinuities,
-//! blur_n_keyed}` (LGH 2019 section 4.3;
+//! blur_n_stopped}` (LGH 2019 section 4.3;
 //! docs/design.md, "Interleaved sampling"), recorded into a frame's batch so that the
 //! lighting loop's images stay on the GPU from the loop to the ratio estimator's filter.
 
@@ -81,7 +81,7 @@ pub fn supported(p: &BlurParams) -> bool {
 
 /// Images blurred in place: `planes` vec4s per pixel, of which `first..first + count` are
 /// blurred with `params`; where `params.a_diff` > 0 the walks stop on the keys of plane 0
-/// (A, blurred by an earlier group).
+/// (A, blurred by an earlier group) smoothed by the same walks.
 pub(crate) struct Planes {
     pub first: u32,
     pub count: u32,
@@ -91,7 +91,8 @@ pub(crate) struct Planes {
 /// Records the blur of `images` (`planes` vec4s per pixel, in place through `scratch` of the
 /// same size) into `batch`: the discontinuities of `p` (the z and normal thresholds of the
 /// first group) once into `jumps`, then per group the pass along x and the pass along y,
-/// a group with a stop on A after the keys of plane 0 as the groups before left it.
+/// a group with a stop on A after the keys of plane 0 as the groups before left it, smoothed
+/// by the group's own walks.
 ///
 /// # Errors
 /// A radius above [`MAX_RADIUS`], or the image exceeds one dispatch.
@@ -129,8 +130,14 @@ pub(crate) fn record<'c>(
         ],
     );
     batch.dispatch("interleave_blur", &pipeline, &bind, n)?;
-    let pipeline = ctx.pipeline("blur", blur_source);
     let keys = ctx.output("blur keys", 4 * n as u64)?;
+    let blur = Blur {
+        g,
+        scratch,
+        jumps,
+        keys: &keys,
+        planes,
+    };
     for group in groups {
         let p = &group.params;
         if !supported(p) {
@@ -140,8 +147,45 @@ pub(crate) fn record<'c>(
             )));
         }
         if p.a_diff > 0.0 {
-            record_keys(ctx, batch, images, &keys, (n as u32, planes))?;
+            // The keys of A smoothed by the group's own walks (lgh-render's
+            // `Stop::SmoothedA`): plane 0 of a copy of the images, blurred without the stop.
+            let bytes = 16 * u64::from(planes) * n as u64;
+            let smooth = ctx.output("blur keys' A", bytes)?;
+            batch.copy(images, 0, &smooth, 0, bytes);
+            let plain = BlurParams { a_diff: 0.0, ..*p };
+            blur.record(ctx, batch, &smooth, (0, 1), &plain)?;
+            record_keys(ctx, batch, &smooth, &keys, (n as u32, planes))?;
+            batch.keep(smooth);
         }
+        blur.record(ctx, batch, images, (group.first, group.count), p)?;
+    }
+    batch.keep(keys);
+    Ok(())
+}
+
+/// What every group's blur shares: the G-buffer and its size, the scratch image, the jumps,
+/// the keys of A, and the vec4s per pixel.
+struct Blur<'a> {
+    g: (&'a GpuGBuffer, u32, u32),
+    scratch: &'a Lease<'a>,
+    jumps: &'a Lease<'a>,
+    keys: &'a Lease<'a>,
+    planes: u32,
+}
+
+impl Blur<'_> {
+    /// Records the pass along x and the pass along y of planes `first..first + count` of
+    /// `images` with `p` (stopping on the keys where `p.a_diff` > 0).
+    fn record<'c>(
+        &self,
+        ctx: &'c GpuContext,
+        batch: &mut Batch<'c>,
+        images: &Lease<'_>,
+        (first, count): (u32, u32),
+        p: &BlurParams,
+    ) -> Result<(), GpuError> {
+        let (gbuffer, width, height) = self.g;
+        let pipeline = ctx.pipeline("blur", blur_source);
         // lgh-render's weights, computed alike.
         let mut weights = [0.0f32; 20];
         for (k, w) in weights.iter_mut().enumerate().take(p.radius as usize + 1) {
@@ -149,9 +193,9 @@ pub(crate) fn record<'c>(
         }
         for vertical in [0, 1] {
             let (from, to) = if vertical == 0 {
-                (images, scratch)
+                (images.binding(), self.scratch.binding())
             } else {
-                (scratch, images)
+                (self.scratch.binding(), images.binding())
             };
             let uniform = batch.uniform(&BlurUniform {
                 width,
@@ -159,9 +203,9 @@ pub(crate) fn record<'c>(
                 vertical,
                 radius: p.radius,
                 phases: p.phases,
-                planes,
-                plane_first: group.first,
-                plane_count: group.count,
+                planes: self.planes,
+                plane_first: first,
+                plane_count: count,
                 weights,
                 a_diff: p.a_diff,
                 jump_shift: if p.creases { 2 } else { 0 },
@@ -172,17 +216,21 @@ pub(crate) fn record<'c>(
                 vec![
                     uniform.as_entire_binding(),
                     gbuffer.binding(),
-                    jumps.binding(),
-                    from.binding(),
-                    to.binding(),
-                    keys.binding(),
+                    self.jumps.binding(),
+                    from,
+                    to,
+                    self.keys.binding(),
                 ],
             );
-            batch.dispatch("interleave_blur", &pipeline, &bind, n)?;
+            batch.dispatch(
+                "interleave_blur",
+                &pipeline,
+                &bind,
+                (width * height) as usize,
+            )?;
         }
+        Ok(())
     }
-    batch.keep(keys);
-    Ok(())
 }
 
 /// Records the keys of plane 0 of `images` (`planes` vec4s per pixel, `pixels` of them)

@@ -6,8 +6,8 @@
 // phase by phase (taps k apart with the same k mod n come from the same sub-image) and the
 // phase means count alike, as balanced_walk on the CPU (which for a full walk equals its
 // phase-normalised convolution). With a_diff > 0 a walk also stops before a pixel whose key
-// (ln lum A, blur_keys.wgsl) differs from the centre's by more than a_diff (blur_n_keyed on
-// the CPU). Pixels that see nothing keep their values; w components pass through. Images:
+// (ln lum A smoothed by the same walks, blur_keys.wgsl; blur_n_stopped with Stop::SmoothedA
+// on the CPU) differs from the centre's by more than a_diff. Pixels that see nothing keep their values; w components pass through. Images:
 // `planes` vec4s per pixel, this pass blurs planes plane_first .. plane_first + plane_count.
 
 const MAX_PHASES: u32 = 16u;

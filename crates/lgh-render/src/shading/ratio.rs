@@ -10,7 +10,7 @@ use glam::Vec3;
 use lgh_core::timing::Timings;
 use rayon::prelude::*;
 
-use crate::denoise::atrous::{AtrousParams, filter_ratio_pair_in_place, unshadowed_key};
+use crate::denoise::atrous::{AtrousParams, filter_ratio_pair_in_place};
 use crate::memory::FrameMemory;
 use crate::passes::gbuffer::GBuffer;
 use crate::shading::interleave::{self, BlurParams};
@@ -188,9 +188,9 @@ pub fn shadowed_indirect_with(
         Some(p) => t.time("interleave_blur", || {
             let disc = discontinuities(g, p, memory);
             let [a] = interleave::blur_n([a], g, disc, &p.recombination());
-            // The walks of S and U stop where the recombined A changes.
-            let keys: Vec<f32> = a.par_iter().map(|&c| unshadowed_key(c)).collect();
-            let [s, u] = interleave::blur_n_keyed([s_hat, u_hat], g, disc, p, Some(&keys));
+            // The walks of S and U stop where the recombined A, smoothed, changes.
+            let stop = interleave::Stop::SmoothedA(&a);
+            let [s, u] = interleave::blur_n_stopped([s_hat, u_hat], g, disc, p, stop);
             [a, s, u]
         }),
         None => [a, s_hat, u_hat],

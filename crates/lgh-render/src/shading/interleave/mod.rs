@@ -19,6 +19,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use crate::denoise::atrous::unshadowed_key;
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::par_filled;
 
@@ -136,12 +137,12 @@ pub struct BlurParams {
     /// averaged phase by phase (taps at offsets k with the same k mod n come from the same
     /// sub-image), so that every sub-image counts equally; 1 for a plain blur.
     pub phases: u32,
-    /// Change of the unshadowed sum A: where the blur is given keys (ln lum A per pixel,
-    /// [`blur_n_keyed`]), a walk stops before a pixel whose key differs from its centre's by
-    /// more than this (0: no such stop). The shadow estimates S and U are summed, so a tap
-    /// weighs by its U: without the stop, near a room's corner, where A climbs steeply, the
-    /// taps of the open wall set the corner's ratio (docs/design.md, "Interleaved
-    /// sampling").
+    /// Change of the unshadowed sum A: where the blur is given A ([`Stop::SmoothedA`]: its
+    /// key ln lum A, A smoothed by this blur's own walks; [`blur_n_stopped`]), a walk stops
+    /// before a pixel whose key differs from its centre's by more than this (0: no such
+    /// stop). The shadow estimates S and U are summed, so a tap weighs by its U: without the
+    /// stop, near a room's corner, where A climbs steeply, the taps of the open wall set the
+    /// corner's ratio (docs/design.md, "Interleaved sampling").
     pub a_diff: f32,
     /// Normal discontinuity of the recombination of A: 1 - n . n' above this (at most
     /// `n_diff`). The unshadowed sum follows the normal closely (a cosine), so at a crease
@@ -318,37 +319,41 @@ pub fn blur_n<const N: usize>(
     disc: &[u8],
     p: &BlurParams,
 ) -> [Vec<Vec3>; N] {
-    blur_n_keyed(imgs, g, disc, p, None)
+    blur_n_stopped(imgs, g, disc, p, Stop::None)
 }
 
-/// [`blur_n`] whose walks also stop where the key (ln lum A per pixel) moves from the
-/// centre's by more than [`BlurParams::a_diff`], when `keys` are given.
+/// Where the walks of [`blur_n_stopped`] stop besides the jumps ([`BlurParams::a_diff`]).
+#[derive(Clone, Copy, Debug)]
+pub enum Stop<'a> {
+    /// Nowhere else.
+    None,
+    /// Where the key ln lum A of the recombined unshadowed sum A, smoothed by the blur's own
+    /// walks (before this stop), moves from the centre's by more than `a_diff`.
+    ///
+    /// The keys of A as recombined carry the noise of the sub-images: under 4 x 4
+    /// interleaving `lgh`'s differ by more than the stop's 5% from one pixel to the next on
+    /// 15% of Sponza's steps (`slc`'s on 11%), so that most walks stopped within a few taps
+    /// and S and U were hardly gathered. A corner's climb of A outlasts the smoothing
+    /// (docs/design.md, "Interleaved sampling").
+    SmoothedA(&'a [Vec3]),
+    /// Where these keys (one per pixel) move from the centre's by more than `a_diff`.
+    Keys(&'a [f32]),
+}
+
+/// [`blur_n`] whose walks also stop where `stop` says.
 #[must_use]
-pub fn blur_n_keyed<const N: usize>(
+pub fn blur_n_stopped<const N: usize>(
     mut imgs: [Vec<Vec3>; N],
     g: &GBuffer,
     disc: &[u8],
     p: &BlurParams,
-    keys: Option<&[f32]>,
+    stop: Stop<'_>,
 ) -> [Vec<Vec3>; N] {
     let w = g.width as usize;
     let r = p.radius as usize;
     let weights: Vec<f32> = (0..=r)
         .map(|k| (-((k * k) as f32) / (2.0 * p.sigma * p.sigma)).exp())
         .collect();
-    // How far the walk goes from each pixel, per direction: it stops before a step that
-    // leaves the image, crosses a jump along its axis, or enters a pixel that sees nothing. Known before the sums, the taps need no tests.
-    let (bit_x, bit_y) = p.jump_bits();
-    let (mut right, mut left) = runs(g, disc, r, bit_x, false);
-    let (mut down, mut up) = runs(g, disc, r, bit_y, true);
-    if let Some(keys) = keys.filter(|_| p.a_diff > 0.0) {
-        stop_at_keys(
-            keys,
-            w,
-            p.a_diff,
-            [&mut right, &mut left, &mut down, &mut up],
-        );
-    }
     let phases = (p.phases as usize).clamp(1, MAX_PHASES);
     // A full walk covers every phase, but the Gaussian need not weigh them alike (at n = 8,
     // sigma 3, from 0.82 to 1.06: the 8 x 8 pattern of the sub-images shows through). Its
@@ -425,10 +430,38 @@ pub fn blur_n_keyed<const N: usize>(
                 }
             });
     };
+    // How far the walk goes from each pixel, per direction: it stops before a step that
+    // leaves the image, crosses a jump along its axis, or enters a pixel that sees nothing.
+    // Known before the sums, the taps need no tests.
+    let (bit_x, bit_y) = p.jump_bits();
+    let (mut right, mut left) = runs(g, disc, r, bit_x, false);
+    let (mut down, mut up) = runs(g, disc, r, bit_y, true);
     let mut scratch = par_filled(g.len(), Vec3::ZERO);
+    let mut blur = |img: &mut Vec<Vec3>, walks: [&[u8]; 4]| {
+        pass(img, &mut scratch, 1, walks[0], walks[1]);
+        pass(&scratch, img, w, walks[2], walks[3]);
+    };
+    let stop = match stop {
+        Stop::None => None,
+        _ if p.a_diff <= 0.0 => None,
+        Stop::Keys(keys) => Some(keys.to_vec()),
+        Stop::SmoothedA(a) => {
+            // A smoothed by the walks themselves, before the stop ([`BlurParams::a_diff`]).
+            let mut smooth = a.to_vec();
+            blur(&mut smooth, [&right, &left, &down, &up]);
+            Some(smooth.par_iter().map(|&c| unshadowed_key(c)).collect())
+        }
+    };
+    if let Some(keys) = stop {
+        stop_at_keys(
+            &keys,
+            w,
+            p.a_diff,
+            [&mut right, &mut left, &mut down, &mut up],
+        );
+    }
     for img in &mut imgs {
-        pass(img, &mut scratch, 1, &right, &left);
-        pass(&scratch, img, w, &down, &up);
+        blur(img, [&right, &left, &down, &up]);
     }
     imgs
 }
