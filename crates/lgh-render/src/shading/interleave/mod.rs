@@ -376,6 +376,7 @@ pub fn blur_n_stopped<const N: usize>(
         weights.clone()
     };
     let full_sum: f32 = full_weights[0] + 2.0 * full_weights[1..].iter().sum::<f32>();
+    let cut = cut_walk_weights(&weights, phases, r);
     // One pass: out[i] = the weighted mean of src over the walk from i (stride `step`).
     let pass = |src: &[Vec3], out: &mut [Vec3], step: usize, fwd: &[u8], back: &[u8]| {
         let flat: &[f32] = bytemuck::cast_slice(src);
@@ -409,22 +410,16 @@ pub fn blur_n_stopped<const N: usize>(
                         continue;
                     }
                     let i = row + x;
-                    out_row[x] = if !g.is_hit(i) {
-                        src[i]
-                    } else if phases > 1 {
-                        balanced_walk(src, i, step, fwd[i], back[i], &weights, phases)
+                    out_row[x] = if g.is_hit(i) {
+                        let (f, b) = (usize::from(fwd[i]), usize::from(back[i]));
+                        let row = &cut[(f * (r + 1) + b) * (2 * r + 1)..][..2 * r + 1];
+                        let mut sum = Vec3::ZERO;
+                        for (k, &wk) in row[r - b..=r + f].iter().enumerate() {
+                            sum += src[i + k * step - b * step] * wk;
+                        }
+                        sum
                     } else {
-                        let (mut sum, mut wsum) = (src[i] * weights[0], weights[0]);
-                        // Positive direction, then negative.
-                        for k in 1..=usize::from(fwd[i]) {
-                            sum += src[i + k * step] * weights[k];
-                            wsum += weights[k];
-                        }
-                        for k in 1..=usize::from(back[i]) {
-                            sum += src[i - k * step] * weights[k];
-                            wsum += weights[k];
-                        }
-                        sum / wsum
+                        src[i]
                     };
                     x += 1;
                 }
@@ -469,43 +464,36 @@ pub fn blur_n_stopped<const N: usize>(
 /// The largest interleaving the phase-balanced walk handles.
 const MAX_PHASES: usize = 16;
 
-/// The walk of a pixel whose walk a discontinuity cut short, averaged phase by phase: the
-/// taps at offsets k (from -`back` to `fwd`) with the same k mod `phases` come from the same
-/// sub-image; each phase's Gaussian-weighted mean counts once, over the phases the walk
-/// reaches. A plain weighted mean would let the sub-images near the pixel dominate, and
-/// along an edge the pixels would keep their own sub-image's light: a comb of streaks with
-/// the period of the interleaving.
-fn balanced_walk(
-    src: &[Vec3],
-    i: usize,
-    step: usize,
-    fwd: u8,
-    back: u8,
-    weights: &[f32],
-    phases: usize,
-) -> Vec3 {
-    let mut sum = [Vec3::ZERO; MAX_PHASES];
-    let mut wsum = [0.0f32; MAX_PHASES];
-    sum[0] = src[i] * weights[0];
-    wsum[0] = weights[0];
-    for k in 1..=usize::from(fwd) {
-        let ph = k % phases;
-        sum[ph] += src[i + k * step] * weights[k];
-        wsum[ph] += weights[k];
-    }
-    for k in 1..=usize::from(back) {
-        let ph = (phases - k % phases) % phases;
-        sum[ph] += src[i - k * step] * weights[k];
-        wsum[ph] += weights[k];
-    }
-    let (mut total, mut count) = (Vec3::ZERO, 0.0f32);
-    for ph in 0..phases {
-        if wsum[ph] > 0.0 {
-            total += sum[ph] / wsum[ph];
-            count += 1.0;
+/// The tap weights of every walk that a discontinuity cut short, `fwd` and `back` in
+/// `0..=r`: row (fwd (r + 1) + back) holds the weights of the taps at offsets -r..=r (zero
+/// outside -back..=fwd), which sum to one. Each is a fixed mean of the taps, so it is found
+/// once per blur, not per pixel.
+///
+/// With interleaving (`phases` > 1) the walk is averaged phase by phase: the taps at offsets
+/// k with the same k mod `phases` come from the same sub-image; each phase's Gaussian-weighted
+/// mean counts once, over the phases the walk reaches. A plain weighted mean would let the
+/// sub-images near the pixel dominate, and along an edge the pixels would keep their own
+/// sub-image's light: a comb of streaks with the period of the interleaving. Without, the
+/// weights are the Gaussian's, renormalised over the taps.
+fn cut_walk_weights(weights: &[f32], phases: usize, r: usize) -> Vec<f32> {
+    let taps = 2 * r + 1;
+    let mut table = vec![0.0f32; (r + 1) * (r + 1) * taps];
+    for fwd in 0..=r {
+        for back in 0..=r {
+            let row = &mut table[(fwd * (r + 1) + back) * taps..][..taps];
+            let phase = |k: isize| k.rem_euclid(phases as isize) as usize;
+            let mut wsum = [0.0f32; MAX_PHASES];
+            for k in -(back as isize)..=fwd as isize {
+                wsum[phase(k)] += weights[k.unsigned_abs()];
+            }
+            let reached = wsum.iter().filter(|&&v| v > 0.0).count() as f32;
+            for k in -(back as isize)..=fwd as isize {
+                row[(k + r as isize) as usize] =
+                    weights[k.unsigned_abs()] / wsum[phase(k)] / reached;
+            }
         }
     }
-    total / count
+    table
 }
 
 /// The blur of a run of consecutive pixels whose walks are all full (r steps both ways), on
