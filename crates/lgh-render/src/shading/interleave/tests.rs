@@ -336,11 +336,11 @@ fn walks_stop_where_the_key_of_a_moves() {
 
 /// The stop on A under 4 x 4 interleaving, on one plane whose unshadowed sum A steps from
 /// 1 to 3 at column 50, each pixel's A off by up to 20% (the noise of its sub-image's
-/// lights, which the recombination does not remove):
-/// with [`Stop::SmoothedA`] (A smoothed by the wide blur) the walks of S and U still stop at the
-/// step, so the pixels beside it keep their side's ratio, and away from it and the borders
-/// fewer than 5% of the walks stop; with the keys of A as recombined (before
-/// 2026-12-07) the noise stops more than half of them.
+/// lights, which the recombination does not remove): with [`Stop::SmoothedA`] (A smoothed
+/// by the wide blur) the walks of S and U still stop at the step, so the pixels beside it
+/// keep their side's ratio, and away from it and the borders fewer than 5% of the walks
+/// stop; with the keys of A as recombined (`Stop::Keys`, the stop before the
+/// twenty-seventh session) the noise stops more than half of them.
 #[test]
 fn the_stop_on_a_passes_over_the_noise_of_the_sub_images() {
     let (w, h, n, step) = (100u32, 40u32, 4u32, 50u32);
