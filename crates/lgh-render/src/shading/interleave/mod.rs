@@ -412,9 +412,9 @@ pub fn blur_n_stopped<const N: usize>(
                     let i = row + x;
                     out_row[x] = if g.is_hit(i) {
                         let (f, b) = (usize::from(fwd[i]), usize::from(back[i]));
-                        let row = &cut[(f * (r + 1) + b) * (2 * r + 1)..][..2 * r + 1];
+                        let taps = &cut[(f * (r + 1) + b) * (2 * r + 1)..][..2 * r + 1];
                         let mut sum = Vec3::ZERO;
-                        for (k, &wk) in row[r - b..=r + f].iter().enumerate() {
+                        for (k, &wk) in taps[r - b..=r + f].iter().enumerate() {
                             sum += src[i + k * step - b * step] * wk;
                         }
                         sum
@@ -441,7 +441,7 @@ pub fn blur_n_stopped<const N: usize>(
         _ if p.a_diff <= 0.0 => None,
         Stop::Keys(keys) => Some(keys.to_vec()),
         Stop::SmoothedA(a) => {
-            // A smoothed by the walks themselves, before the stop ([`BlurParams::a_diff`]).
+            // A smoothed by the walks themselves, before the stop on it.
             let mut smooth = a.to_vec();
             blur(&mut smooth, [&right, &left, &down, &up]);
             Some(smooth.par_iter().map(|&c| unshadowed_key(c)).collect())
