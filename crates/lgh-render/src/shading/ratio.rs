@@ -57,6 +57,45 @@ pub struct Shadowed {
     pub rays: u64,
 }
 
+/// The unshadowed sum A of the lighting loop, and what the pixels whose recombination
+/// window misses sub-images shaded of those themselves ([`interleave::missed_sub_images`]).
+#[derive(Clone, Debug, Default)]
+pub struct Unshadowed {
+    /// A per pixel, of the pixel's own sub-image (times n^2).
+    pub a: Vec<Vec3>,
+    /// The missed sub-images, if any pixel fills its window.
+    pub fill: Option<WindowFill>,
+}
+
+impl From<Vec<Vec3>> for Unshadowed {
+    fn from(a: Vec<Vec3>) -> Self {
+        Self { a, fill: None }
+    }
+}
+
+/// The sub-images that pixels shaded for their cut recombination windows
+/// ([`interleave::recombine_filled`]).
+#[derive(Clone, Debug, Default)]
+pub struct WindowFill {
+    /// Per pixel, the sub-images its window misses (bit s = sub-image s; 0: none).
+    pub missed: Vec<u64>,
+    /// Per pixel, the lights of those sub-images at the pixel (times n^2).
+    pub filled: Vec<Vec3>,
+}
+
+/// A recombined by the narrowest blur of `p` ([`BlurParams::recombination`]), and where
+/// pixels filled their windows, from what they shaded.
+fn recombine(a: Unshadowed, g: &GBuffer, disc: &[u8], p: &BlurParams) -> Vec<Vec3> {
+    let p = p.recombination();
+    let Unshadowed { a, fill } = a;
+    let raw = fill.as_ref().map(|_| a.clone());
+    let [mut out] = interleave::blur_n([a], g, disc, &p);
+    if let (Some(fill), Some(raw)) = (fill, raw) {
+        interleave::recombine_filled(&mut out, &raw, &fill.filled, &fill.missed, g, disc, &p);
+    }
+    out
+}
+
 /// The shadow ratio per pixel and channel (1 where nothing is shadowed or sampled).
 #[derive(Clone, Debug, Default)]
 pub struct ShadowRatio {
@@ -106,7 +145,11 @@ pub fn composite(g: &GBuffer, a: &[Vec3], ratio: &[Vec3]) -> Vec<Vec3> {
 
 /// The blur's discontinuities of `g` with `p`'s thresholds, kept in `memory` while the view
 /// stands still.
-fn discontinuities<'m>(g: &GBuffer, p: &BlurParams, memory: &'m mut FrameMemory) -> &'m [u8] {
+pub(crate) fn discontinuities<'m>(
+    g: &GBuffer,
+    p: &BlurParams,
+    memory: &'m mut FrameMemory,
+) -> &'m [u8] {
     let key = [
         p.z_diff.to_bits(),
         p.n_diff.to_bits(),
@@ -127,7 +170,7 @@ fn discontinuities<'m>(g: &GBuffer, p: &BlurParams, memory: &'m mut FrameMemory)
 pub fn shadowed_indirect(
     world: &World,
     g: &GBuffer,
-    a: Vec<Vec3>,
+    a: impl Into<Unshadowed>,
     estimates: ShadowEstimates,
     settings: &RatioFilter,
     t: &mut Timings,
@@ -148,7 +191,7 @@ pub type AtrousBackend =
 pub fn shadowed_indirect_with(
     world: &World,
     g: &GBuffer,
-    a: Vec<Vec3>,
+    a: impl Into<Unshadowed>,
     estimates: ShadowEstimates,
     settings: &RatioFilter,
     t: &mut Timings,
@@ -156,14 +199,14 @@ pub fn shadowed_indirect_with(
     atrous: Option<AtrousBackend>,
 ) -> Shadowed {
     let n_px = g.len();
+    let a: Unshadowed = a.into();
     if estimates.k == 0 {
         let a = match &settings.interleave_blur {
             Some(p) => t.time("interleave_blur", || {
                 let disc = discontinuities(g, p, memory);
-                let [a] = interleave::blur_n([a], g, disc, &p.recombination());
-                a
+                recombine(a, g, disc, p)
             }),
-            None => a,
+            None => a.a,
         };
         let ratio = ShadowRatio::unshadowed(n_px);
         let indirect = t.time("composite", || composite(g, &a, &ratio.filtered));
@@ -187,13 +230,13 @@ pub fn shadowed_indirect_with(
     let [a, s_hat, u_hat] = match &settings.interleave_blur {
         Some(p) => t.time("interleave_blur", || {
             let disc = discontinuities(g, p, memory);
-            let [a] = interleave::blur_n([a], g, disc, &p.recombination());
+            let a = recombine(a, g, disc, p);
             // The walks of S and U stop where the recombined A, smoothed, changes.
             let stop = interleave::Stop::SmoothedA(&a);
             let [s, u] = interleave::blur_n_stopped([s_hat, u_hat], g, disc, p, stop);
             [a, s, u]
         }),
-        None => [a, s_hat, u_hat],
+        None => [a.a, s_hat, u_hat],
     };
     let mut raw = Vec::new();
     let (s_f, u_f) = t.time("shadow_filter", || {

@@ -45,6 +45,15 @@ impl AllBounds {
     /// full-resolution pixels.
     #[must_use]
     pub fn new(g: &GBuffer, n: u32, tile: u32) -> Self {
+        Self::with_guests(g, n, tile, None)
+    }
+
+    /// [`AllBounds::new`] where pixels also count in the tiles of the sub-images of their
+    /// bits in `guests` (one mask per pixel, bit s = sub-image s;
+    /// [`crate::shading::interleave::missed_sub_images`]), which shade them as guests: the
+    /// tile of a sub-image then lists the lights that reach its guests too.
+    #[must_use]
+    pub fn with_guests(g: &GBuffer, n: u32, tile: u32, guests: Option<&[u64]>) -> Self {
         let tiles_x = g.width.div_ceil(tile);
         let tiles_y = g.height.div_ceil(tile);
         let n2 = (n * n) as usize;
@@ -60,8 +69,15 @@ impl AllBounds {
                     for y in ys.clone() {
                         let start = (y * g.width) as usize;
                         for (i, (_, s, tx)) in (start..).zip(row_phases(y, g.width, n, tile)) {
-                            if g.is_hit(i) {
-                                f(s * tiles_x as usize + tx, i);
+                            if !g.is_hit(i) {
+                                continue;
+                            }
+                            f(s * tiles_x as usize + tx, i);
+                            let mut guest = guests.map_or(0, |m| m[i] & !(1 << s));
+                            while guest != 0 {
+                                let other = guest.trailing_zeros() as usize;
+                                guest &= guest - 1;
+                                f(other * tiles_x as usize + tx, i);
                             }
                         }
                     }
@@ -394,5 +410,60 @@ mod tests {
         t.add(1.0, Vec3::X, Vec3::Y);
         assert!(t.may_reach(-far, far, c, far, Vec3::ZERO, 0.0));
         assert!(!t.may_reach(-far, far, c, far, Vec3::ZERO, 2.0));
+    }
+}
+
+#[cfg(test)]
+mod guest_tests {
+    use super::*;
+    use lgh_core::rng::Rng;
+
+    /// A pixel that shades other sub-images as their guest counts in their tiles' depth
+    /// ranges (and nowhere else): with every pixel at depth 2-3 but one at depth 0.5, that
+    /// pixel's guest sub-images' tiles reach down to 0.5, the others' do not.
+    #[test]
+    fn guests_count_in_the_tiles_of_the_sub_images_they_shade() {
+        let (w, h, n, tile) = (32u32, 16u32, 4u32, 16u32);
+        let mut rng = Rng::new(&[5]);
+        let mut g = tests_gbuffer(w, h, &mut rng);
+        let guest = (5 * w + 21) as usize; // tile (1, 0), sub-image (1, 1) = 5
+        g.depth[guest] = 0.5;
+        let mut masks = vec![0u64; (w * h) as usize];
+        masks[guest] = (1 << 0) | (1 << 14);
+        let plain = AllBounds::new(&g, n, tile);
+        let with = AllBounds::with_guests(&g, n, tile, Some(&masks));
+        for s in 0..16 {
+            for tx in 0..2 {
+                let near = with.get(s, tx, 0).zmin;
+                let want = if tx == 1 && matches!(s, 0 | 5 | 14) {
+                    0.5
+                } else {
+                    plain.get(s, tx, 0).zmin
+                };
+                assert_eq!(near, want, "sub-image {s}, tile {tx}");
+                assert!(s == 5 && tx == 1 || plain.get(s, tx, 0).zmin >= 2.0);
+            }
+        }
+    }
+
+    /// `w` x `h` pixels facing the camera at depths 2-3.
+    fn tests_gbuffer(w: u32, h: u32, rng: &mut Rng) -> GBuffer {
+        let n_px = (w * h) as usize;
+        let depth: Vec<f32> = (0..n_px).map(|_| 2.0 + rng.next_f32()).collect();
+        let position = (0..n_px)
+            .map(|i| Vec3::new((i as u32 % w) as f32, (i as u32 / w) as f32, -depth[i]))
+            .collect();
+        GBuffer {
+            width: w,
+            height: h,
+            position,
+            normal: vec![Vec3::Z; n_px],
+            geo_normal: vec![Vec3::Z; n_px],
+            albedo: vec![Vec3::ONE; n_px],
+            depth,
+            emission: vec![Vec3::ZERO; n_px],
+            view: None,
+            deferred: Default::default(),
+        }
     }
 }

@@ -23,3 +23,4 @@ mod shared_scenes;
 mod slc_method;
 mod unbiased;
 mod vpl_energy;
+mod window_fill;

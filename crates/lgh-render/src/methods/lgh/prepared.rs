@@ -21,15 +21,16 @@ use super::lights::{LghTargets, ShadeLights};
 use super::normal_bins::{NORMAL_BINS, split_by_normal};
 use super::settings::{DEFAULT_INTERLEAVE, DEFAULT_SHADOW_SAMPLES, Estimator, JitterAt};
 use super::settings::{Selection, ShadowTarget, auto_tile};
-use super::shade::{RowContext, RowScratch, shade_rows};
+use super::shade::{RowContext, RowScratch, Shaded, shade_rows};
 use super::tables::DeviceKeeps;
 use crate::memory::FrameMemory;
 use crate::methods::lgh::light_batch::PackedLight;
 use crate::methods::{MethodInputs, MethodOutput};
 use crate::passes::par_filled;
+use crate::shading::interleave::missed_sub_images;
 use crate::shading::ratio::{
-    AtrousBackend, RATIO_CORRECTION, RATIO_VISIBILITY, RatioFilter, Shadowed,
-    shadowed_indirect_with,
+    AtrousBackend, RATIO_CORRECTION, RATIO_VISIBILITY, RatioFilter, Shadowed, Unshadowed,
+    WindowFill, discontinuities, shadowed_indirect_with,
 };
 use crate::shading::reservoirs::ReservoirLayout;
 use crate::shading::shadow_pass::{ShadowEstimates, ShadowPass, Targets};
@@ -58,6 +59,9 @@ pub struct LghFrame {
     pub(super) bins: Option<InterleavedBins>,
     /// The tile edge in sub-image pixels.
     tile: u32,
+    /// Per pixel, the sub-images its recombination window misses and it shades itself
+    /// (CPU loop only; `lgh.fill_below`).
+    missed: Option<Vec<u64>>,
     pub(super) packed: Vec<PackedLight>,
     pub(super) stats: LghStats,
     timings: Timings,
@@ -100,13 +104,14 @@ fn bin(
     lights: &ShadeLights,
     inputs: &MethodInputs,
     memory: &mut FrameMemory,
-    n: u32,
-    tile: u32,
+    (n, tile): (u32, u32),
+    guests: Option<(&[u64], f32)>,
 ) -> InterleavedBins {
     let g = inputs.gbuffer;
-    let bounds = memory
-        .tile_bounds
-        .get_or_insert_with(g, [n, tile, 0, 0], || AllBounds::new(g, n, tile * n));
+    let key = [n, tile, guests.map_or(0, |(_, below)| below.to_bits()), 0];
+    let bounds = memory.tile_bounds.get_or_insert_with(g, key, || {
+        AllBounds::with_guests(g, n, tile * n, guests.map(|(m, _)| m))
+    });
     let (facing, holes) = lights.bin_extras();
     InterleavedBins::from_bounds(
         g,
@@ -122,6 +127,17 @@ fn bin(
     )
 }
 
+/// The sub-images each pixel's recombination window misses where it reaches fewer than
+/// `lgh.fill_below` n^2 of them ([`missed_sub_images`]), under the frame's blur; `None`
+/// without interleaving or where no pixel misses any.
+fn missed(inputs: &MethodInputs, memory: &mut FrameMemory, n: u32) -> Option<Vec<u64>> {
+    let all = inputs.settings;
+    let p = all.ratio_filter(n).interleave_blur?;
+    let g = inputs.gbuffer;
+    let disc = discontinuities(g, &p, memory);
+    missed_sub_images(g, disc, &p.recombination(), all.lgh.fill_below)
+}
+
 /// What a lighting loop gives for every pixel ([`LghFrame::shade`] on the CPU): the
 /// unshadowed sum A, the overdraw (lights whose sphere covers the pixel), the shadow
 /// estimates S and U, and its pass timings in milliseconds.
@@ -133,6 +149,8 @@ pub struct LoopResult {
     pub overdraw: Vec<u32>,
     /// S, U and the rays traced.
     pub estimates: ShadowEstimates,
+    /// What the pixels that fill their recombination windows shaded (the CPU's loop).
+    pub fill: Option<WindowFill>,
     /// Timings of the loop's passes ("lighting", "shadow_targets", "shadow_rays").
     pub timings: Timings,
 }
@@ -329,12 +347,20 @@ impl LghFrame {
             lights.show_only_level(level);
         }
         let tile = all.tiling.tile.unwrap_or_else(|| auto_tile(n)).max(1);
-        let bins = (!tables).then(|| bin(&lights, inputs, memory, n, tile));
+        // The CPU's loop fills cut recombination windows (a backend's does not yet).
+        let missed = if tables {
+            None
+        } else {
+            missed(inputs, memory, n)
+        };
+        let guests = missed.as_deref().map(|m| (m, settings.fill_below));
+        let bins = (!tables).then(|| bin(&lights, inputs, memory, (n, tile), guests));
         let packed = lights.packed(n2 as f32);
         lighting_ms += start.elapsed().as_secs_f64() * 1e3;
         Ok(Prepared::Frame(Box::new(Self {
             lights,
             bins,
+            missed,
             tile,
             packed,
             stats,
@@ -360,7 +386,7 @@ impl LghFrame {
     pub fn bin_on_cpu(&mut self, inputs: &MethodInputs, memory: &mut FrameMemory) {
         if self.bins.is_none() && self.lights_on_cpu() {
             let start = Instant::now();
-            self.bins = Some(bin(&self.lights, inputs, memory, self.n, self.tile));
+            self.bins = Some(bin(&self.lights, inputs, memory, (self.n, self.tile), None));
             self.lighting_ms += start.elapsed().as_secs_f64() * 1e3;
         }
     }
@@ -400,7 +426,7 @@ impl LghFrame {
         let start = Instant::now();
         let representative = settings.shadow_target == ShadowTarget::Representative;
         // Per pixel: A and overdraw; and k reservoirs.
-        let mut shaded: Vec<(Vec3, u32)> = par_filled(g.len(), (Vec3::ZERO, 0));
+        let mut shaded: Vec<Shaded> = par_filled(g.len(), (Vec3::ZERO, 0, Vec3::ZERO));
         let binned;
         let bins = match &self.bins {
             Some(b) => b,
@@ -409,8 +435,8 @@ impl LghFrame {
                     &self.lights,
                     inputs,
                     &mut FrameMemory::default(),
-                    self.n,
-                    self.tile,
+                    (self.n, self.tile),
+                    self.missed.as_deref().map(|m| (m, settings.fill_below)),
                 );
                 &binned
             }
@@ -429,6 +455,7 @@ impl LghFrame {
             phases: self.n as usize,
             strata: (settings.selection == Selection::Dithered)
                 .then(|| ScreenStrata::new(seed, self.n)),
+            missed: self.missed.as_deref(),
         };
         let targets = LghTargets {
             lights: &self.lights,
@@ -459,6 +486,10 @@ impl LghFrame {
         LoopResult {
             a: shaded.par_iter().map(|p| p.0).collect(),
             overdraw: shaded.par_iter().map(|p| p.1).collect(),
+            fill: self.missed.as_ref().map(|missed| WindowFill {
+                missed: missed.clone(),
+                filled: shaded.par_iter().map(|p| p.2).collect(),
+            }),
             estimates,
             timings,
         }
@@ -491,10 +522,12 @@ impl LghFrame {
             a,
             overdraw,
             estimates,
+            fill,
             timings,
         } = shaded;
         let mut t = timings;
         let (world, g) = (inputs.world, inputs.gbuffer);
+        let a = Unshadowed { a, fill };
         let shadowed =
             shadowed_indirect_with(world, g, a, estimates, &filter, &mut t, memory, atrous);
         self.finish_shadowed(inputs, shadowed, overdraw, t)

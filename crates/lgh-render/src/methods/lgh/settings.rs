@@ -4,6 +4,8 @@
 use lgh_core::lighting_grid::{Construction, LevelCount};
 use lgh_core::vpl::GridEmission;
 
+use crate::shading::interleave::DEFAULT_FILL_BELOW;
+
 /// Settings of the LGH method. The shadow sample count, the shadow filter and the
 /// interleaving are shared with `slc` ([`crate::settings::ShadowSettings`],
 /// [`crate::settings::Tiling`]).
@@ -77,6 +79,13 @@ pub struct LghSettings {
     /// sum to the full image (the grid-level view of `lgh view`, key G).
     #[cfg_attr(feature = "clap", arg(long, value_name = "LEVEL"))]
     pub only_level: Option<u32>,
+    /// lgh, with interleaving: a pixel whose n x n recombination window reaches fewer than
+    /// this fraction of the n^2 sub-images (thin or folded geometry: the window stops at
+    /// its edges) shades the lights of the sub-images it misses itself, so that each light
+    /// counts once there too (an extension; docs/design.md, "Filling cut windows"). 0:
+    /// never. The CPU's lighting loop only (`--device gpu` does not fill yet).
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = LghSettings::default().fill_below, value_name = "FRACTION"))]
+    pub fill_below: f32,
 }
 
 /// What the shadow samples of `lgh` estimate (docs/design.md, "Unbiased estimate").
@@ -168,6 +177,7 @@ impl Default for LghSettings {
             shadow_target: ShadowTarget::Representative,
             estimator: Estimator::Unbiased,
             only_level: None,
+            fill_below: DEFAULT_FILL_BELOW,
         }
     }
 }

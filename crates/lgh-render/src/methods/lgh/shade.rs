@@ -39,7 +39,14 @@ pub(super) struct RowContext<'a> {
     pub(super) phases: usize,
     /// The frame's dithered strata, where the selection is [`Selection::Dithered`].
     pub(super) strata: Option<ScreenStrata>,
+    /// Per pixel, the sub-images its recombination window misses, which it shades as a
+    /// guest of theirs ([`crate::shading::interleave::missed_sub_images`]).
+    pub(super) missed: Option<&'a [u64]>,
 }
+
+/// What the lighting loop gives a pixel: A of its own sub-image, the overdraw, and the
+/// lights of the sub-images it shades as a guest (all times n^2).
+pub(super) type Shaded = (Vec3, u32, Vec3);
 
 impl RowContext<'_> {
     /// The shadow sample of light `j` with unshadowed contribution `bc` at the pixel, whose
@@ -76,6 +83,8 @@ pub(super) struct RowScratch {
     /// Each chunk's lanes as the loop evaluated them, its selection weights and
     /// B_l(d) f_j: the picks read them instead of evaluating their chunks again.
     chunk_lanes: Vec<([f32; LANES], [[f32; LANES]; 3])>,
+    /// The guests of the current tile: (x, y, the sub-images each shades).
+    guests: Vec<(usize, usize, u64)>,
 }
 
 /// The selection weights f_j of a chunk's lights: the luminance of their contributions,
@@ -101,7 +110,9 @@ fn candidate_weights(
 
 /// The lighting loop over the image rows `y0..` held by `rows` (and their reservoirs
 /// `res`; LGH 2019 section 3.2 and Appendix A): per pixel, the sum A of B_l(d) f_j over its
-/// tile's lights, the overdraw, and the k reservoirs of shadow candidates.
+/// tile's lights, the overdraw, and the k reservoirs of shadow candidates; and for the
+/// pixels that fill their recombination window ([`RowContext::missed`]), the lights of the
+/// sub-images they miss, with those sub-images' batches (A only: no candidates).
 ///
 /// The pixels are visited tile by tile and, within a tile, sub-image by sub-image, so that
 /// the light batch of a (sub-image, tile) is filled once for all its pixels in the rows, not
@@ -113,7 +124,7 @@ fn candidate_weights(
 pub(super) fn shade_rows(
     ctx: &RowContext,
     y0: usize,
-    rows: &mut [(Vec3, u32)],
+    rows: &mut [Shaded],
     res: &mut [Reservoir<ShadowSample>],
     scratch: &mut RowScratch,
 ) {
@@ -123,6 +134,17 @@ pub(super) fn shade_rows(
     let tile = ctx.bins.tile_pixels().max(1) as usize;
     for x0 in (0..w).step_by(tile) {
         let x1 = (x0 + tile).min(w);
+        scratch.guests.clear();
+        if let Some(missed) = ctx.missed {
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let m = missed[y * w + x];
+                    if m != 0 {
+                        scratch.guests.push((x, y, m));
+                    }
+                }
+            }
+        }
         for (sy, sx) in (0..n).flat_map(|sy| (0..n).map(move |sx| (sy, sx))) {
             let first_y = y0 + (sy + n - y0 % n) % n;
             let first_x = x0 + (sx + n - x0 % n) % n;
@@ -133,8 +155,40 @@ pub(super) fn shade_rows(
                     shade_pixel(ctx, x, y, px, ctx.layout.pixel_mut(res, at), scratch);
                 }
             }
+            // The tile's guests that miss this sub-image, with its light batch (the tile's
+            // pixels of the sub-image share it: the same key as its first pixel's).
+            let bit = 1u64 << (sy * n + sx);
+            if first_x < x1 && first_y < y1 && scratch.guests.iter().any(|g| g.2 & bit != 0) {
+                let key = ctx.bins.tile_key(first_x as u32, first_y as u32);
+                if scratch.batch.key != Some(key) {
+                    let lights = ctx.bins.lights_at(first_x as u32, first_y as u32);
+                    scratch.batch.fill(key, ctx.packed, lights);
+                }
+                for &(x, y, m) in &scratch.guests {
+                    if m & bit != 0 {
+                        let i = y * w + x;
+                        rows[(y - y0) * w + x].2 += guest_sum(&scratch.batch, ctx.g, i, ctx.eps2);
+                    }
+                }
+            }
         }
     }
+}
+
+/// The sum of a batch's lights at pixel `i`: what a guest shades of the sub-image.
+#[inline(always)]
+fn guest_sum(batch: &LightBatch, g: &GBuffer, i: usize, eps2: f32) -> Vec3 {
+    let (xp, n) = (g.position[i], g.normal[i]);
+    let mut sum = [[0.0f32; LANES]; 3];
+    for chunk in 0..batch.chunks() {
+        let lanes = batch.eval(chunk, xp, n, eps2);
+        for (s, v) in sum.iter_mut().zip(&lanes.value) {
+            for l in 0..LANES {
+                s[l] += v[l];
+            }
+        }
+    }
+    Vec3::from(sum.map(|s| s.iter().sum::<f32>()))
 }
 
 /// The lighting loop of pixel (x, y): A and the overdraw into `px`, the shadow candidates
@@ -144,7 +198,7 @@ fn shade_pixel(
     ctx: &RowContext,
     x: usize,
     y: usize,
-    px: &mut (Vec3, u32),
+    px: &mut Shaded,
     res: &mut [Reservoir<ShadowSample>],
     scratch: &mut RowScratch,
 ) {
@@ -165,6 +219,7 @@ fn shade_pixel(
         batch,
         chunk_weights,
         chunk_lanes,
+        ..
     } = scratch;
     // Stratified selection applies where targets are drawn after selection.
     let stratified =
@@ -175,7 +230,7 @@ fn shade_pixel(
     }
     let (xp, n) = (g.position[i], g.normal[i]);
     let mut rng = Rng::new(&[seed, i as u64, STREAM_LGH]);
-    let (a, overdraw) = px;
+    let (a, overdraw, _) = px;
     let key = bins.tile_key(x as u32, y as u32);
     if batch.key != Some(key) {
         batch.fill(key, packed, bins.lights_at(x as u32, y as u32));

@@ -19,6 +19,9 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+mod fill;
+pub use fill::{DEFAULT_FILL_BELOW, missed_sub_images, recombine_filled};
+
 use crate::denoise::atrous::unshadowed_key;
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::par_filled;
