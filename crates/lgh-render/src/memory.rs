@@ -31,6 +31,9 @@ pub struct FrameMemory {
     pub tile_bounds: ViewCache<AllBounds>,
     /// The interleave blur's discontinuities, while the G-buffer shows the same view.
     pub discontinuities: ViewCache<Vec<u8>>,
+    /// The sub-images each pixel's recombination window misses
+    /// ([`crate::shading::interleave::missed_sub_images`]; `None`: none misses any).
+    pub missed_sub_images: ViewCache<Option<Vec<u64>>>,
     /// The edge resolve's sub-pixel samples (its primary rays), while the G-buffer shows
     /// the same view: a viewer whose camera stands still traces them once.
     pub edge_resolve: ViewCache<EdgeResolve>,

@@ -129,13 +129,30 @@ fn bin(
 
 /// The sub-images each pixel's recombination window misses where it reaches fewer than
 /// `lgh.fill_below` n^2 of them ([`missed_sub_images`]), under the frame's blur; `None`
-/// without interleaving or where no pixel misses any.
+/// without interleaving or where no pixel misses any. Kept in `memory` while the view
+/// stands still.
 fn missed(inputs: &MethodInputs, memory: &mut FrameMemory, n: u32) -> Option<Vec<u64>> {
     let all = inputs.settings;
     let p = all.ratio_filter(n).interleave_blur?;
     let g = inputs.gbuffer;
-    let disc = discontinuities(g, &p, memory);
-    missed_sub_images(g, disc, &p.recombination(), all.lgh.fill_below)
+    let below = all.lgh.fill_below;
+    let key = [
+        p.z_diff.to_bits(),
+        p.crease_n_diff().to_bits(),
+        n,
+        below.to_bits(),
+    ];
+    if !memory.missed_sub_images.holds(g, key) {
+        let missed =
+            missed_sub_images(g, discontinuities(g, &p, memory), &p.recombination(), below);
+        memory
+            .missed_sub_images
+            .get_or_insert_with(g, key, || missed);
+    }
+    memory
+        .missed_sub_images
+        .get_or_insert_with(g, key, || None)
+        .clone()
 }
 
 /// What a lighting loop gives for every pixel ([`LghFrame::shade`] on the CPU): the
