@@ -81,3 +81,40 @@ fn tiles_cut_the_frame_into_a_grid_once() {
     assert!(Region::tile(5, 4, 160, 90).is_err());
     assert!(Region::parse("1,2,3").is_err());
 }
+
+/// The same for `lgh` under 4 x 4 interleaving on the clutter scene, where pixels along the
+/// boxes' edges fill their cut recombination windows (`lgh.fill_below`): the masks, the
+/// guests' tile bounds and their sums near the region equal the whole frame's.
+#[test]
+fn a_region_with_filled_windows_equals_the_whole_frame() {
+    let world = common::test_scene_world("clutter.toml");
+    let mut s = RenderSettings {
+        width: 160,
+        height: 96,
+        vpls: 4000,
+        method: lgh_render::methods::lgh::LGH,
+        ..RenderSettings::default()
+    };
+    s.tiling.interleave = Some(4);
+    let whole = render_frame(&world, &s, &lgh_render::Silent).unwrap();
+    let region = Region::tile(5, 9, 160, 96).unwrap();
+    let piece = render_frame(
+        &world,
+        &RenderSettings {
+            region: Some(region),
+            ..s.clone()
+        },
+        &lgh_render::Silent,
+    )
+    .unwrap();
+    let mut compared = 0;
+    for y in 0..96 {
+        for x in 0..160 {
+            if region.contains(x, y) {
+                assert_eq!(piece.image.get(x, y), whole.image.get(x, y), "({x}, {y})");
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 100, "{compared}");
+}

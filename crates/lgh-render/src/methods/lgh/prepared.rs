@@ -142,17 +142,14 @@ fn missed(inputs: &MethodInputs, memory: &mut FrameMemory, n: u32) -> Option<Vec
         n,
         below.to_bits(),
     ];
-    if !memory.missed_sub_images.holds(g, key) {
-        let missed =
-            missed_sub_images(g, discontinuities(g, &p, memory), &p.recombination(), below);
-        memory
-            .missed_sub_images
-            .get_or_insert_with(g, key, || missed);
+    if let Some(kept) = memory.missed_sub_images.kept(g, key) {
+        return kept.clone();
     }
-    memory
-        .missed_sub_images
-        .get_or_insert_with(g, key, || None)
-        .clone()
+    let missed = missed_sub_images(g, discontinuities(g, &p, memory), &p.recombination(), below);
+    if g.view.is_some() {
+        memory.missed_sub_images.insert(g, key, missed.clone());
+    }
+    missed
 }
 
 /// What a lighting loop gives for every pixel ([`LghFrame::shade`] on the CPU): the
