@@ -419,10 +419,7 @@ impl RenderSettings {
     pub fn ratio_filter(&self, n: u32) -> RatioFilter {
         RatioFilter {
             passes: self.shadows.passes(),
-            interleave_blur: (n > 1).then_some(BlurParams {
-                phases: n,
-                ..self.tiling.blur
-            }),
+            interleave_blur: (n > 1).then_some(self.tiling.blur.with_phases(n)),
             max_ratio: RATIO_VISIBILITY,
             c_phi: self.shadows.filter_color,
             a_phi: self.shadows.filter_unshadowed,
@@ -497,6 +494,9 @@ impl RenderSettings {
         positive("clamp-fraction", self.clamp_fraction)?;
         if !(self.vpl_clamp.is_finite() && (0.0..=1000.0).contains(&self.vpl_clamp)) {
             return err("vpl-clamp", &self.vpl_clamp, "expected 0 to 1000");
+        }
+        if !(0.0..=1.0).contains(&self.lgh.fill_below) {
+            return err("fill-below", &self.lgh.fill_below, "expected 0 to 1");
         }
         if let Some(k) = self.shadows.samples {
             in_range("shadow-samples", k, 0, MAX_SHADOW_SAMPLES)?;

@@ -168,6 +168,12 @@ fn negative_and_absurd_values_get_the_limit_in_the_message() {
         );
     }
     assert_error(&lgh(&["render", "--vpls", "-5", "--out", o]), &["-5"]);
+    for bad in ["-1", "nan", "2"] {
+        assert_error(
+            &lgh(&["render", "--fill-below", bad, "--out", o]),
+            &["--fill-below", "expected 0 to 1"],
+        );
+    }
     assert_error(
         &lgh(&["render", "--vpls", "1000000000", "--out", o]),
         &["--vpls 1000000000", "at most 16777216"],

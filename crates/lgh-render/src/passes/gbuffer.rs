@@ -78,6 +78,30 @@ impl std::fmt::Debug for DeferredPlanes {
 }
 
 impl GBuffer {
+    /// A `width` x `height` G-buffer of the given planes (the geometric normals the shading
+    /// ones, white albedo, no emission, no view): the scenes of unit tests.
+    #[cfg(test)]
+    pub(crate) fn from_planes(
+        (width, height): (u32, u32),
+        position: Vec<Vec3>,
+        normal: Vec<Vec3>,
+        depth: Vec<f32>,
+    ) -> Self {
+        let n = position.len();
+        Self {
+            width,
+            height,
+            position,
+            geo_normal: normal.clone(),
+            normal,
+            albedo: vec![Vec3::ONE; n],
+            depth,
+            emission: vec![Vec3::ZERO; n],
+            view: None,
+            deferred: Default::default(),
+        }
+    }
+
     /// Traces one primary ray per pixel centre, in parallel.
     #[must_use]
     pub fn render(world: &World, frame: &CameraFrame, width: u32, height: u32) -> Self {

@@ -425,7 +425,7 @@ mod guest_tests {
     fn guests_count_in_the_tiles_of_the_sub_images_they_shade() {
         let (w, h, n, tile) = (32u32, 16u32, 4u32, 16u32);
         let mut rng = Rng::new(&[5]);
-        let mut g = tests_gbuffer(w, h, &mut rng);
+        let mut g = facing_points(w, h, &mut rng);
         let guest = (5 * w + 21) as usize; // tile (1, 0), sub-image (1, 1) = 5
         g.depth[guest] = 0.5;
         let mut masks = vec![0u64; (w * h) as usize];
@@ -447,23 +447,12 @@ mod guest_tests {
     }
 
     /// `w` x `h` pixels facing the camera at depths 2-3.
-    fn tests_gbuffer(w: u32, h: u32, rng: &mut Rng) -> GBuffer {
+    fn facing_points(w: u32, h: u32, rng: &mut Rng) -> GBuffer {
         let n_px = (w * h) as usize;
         let depth: Vec<f32> = (0..n_px).map(|_| 2.0 + rng.next_f32()).collect();
         let position = (0..n_px)
             .map(|i| Vec3::new((i as u32 % w) as f32, (i as u32 / w) as f32, -depth[i]))
             .collect();
-        GBuffer {
-            width: w,
-            height: h,
-            position,
-            normal: vec![Vec3::Z; n_px],
-            geo_normal: vec![Vec3::Z; n_px],
-            albedo: vec![Vec3::ONE; n_px],
-            depth,
-            emission: vec![Vec3::ZERO; n_px],
-            view: None,
-            deferred: Default::default(),
-        }
+        GBuffer::from_planes((w, h), position, vec![Vec3::Z; n_px], depth)
     }
 }

@@ -181,14 +181,19 @@ fn guest_sum(batch: &LightBatch, g: &GBuffer, i: usize, eps2: f32) -> Vec3 {
     let (xp, n) = (g.position[i], g.normal[i]);
     let mut sum = [[0.0f32; LANES]; 3];
     for chunk in 0..batch.chunks() {
-        let lanes = batch.eval(chunk, xp, n, eps2);
-        for (s, v) in sum.iter_mut().zip(&lanes.value) {
-            for l in 0..LANES {
-                s[l] += v[l];
-            }
-        }
+        add_lanes(&mut sum, &batch.eval(chunk, xp, n, eps2).value);
     }
     Vec3::from(sum.map(|s| s.iter().sum::<f32>()))
+}
+
+/// Adds a chunk's lane values (RGB planes) to `sum`, lane by lane.
+#[inline(always)]
+fn add_lanes(sum: &mut [[f32; LANES]; 3], value: &[[f32; LANES]; 3]) {
+    for (s, v) in sum.iter_mut().zip(value) {
+        for l in 0..LANES {
+            s[l] += v[l];
+        }
+    }
 }
 
 /// The lighting loop of pixel (x, y): A and the overdraw into `px`, the shadow candidates
@@ -243,11 +248,7 @@ fn shade_pixel(
     for chunk in 0..batch.chunks() {
         let lanes = batch.eval(chunk, xp, n, eps2);
         *overdraw += lanes.reached.iter().map(|&r| u32::from(r)).sum::<u32>();
-        for (s, v) in sum.iter_mut().zip(&lanes.value) {
-            for l in 0..LANES {
-                s[l] += v[l];
-            }
-        }
+        add_lanes(&mut sum, &lanes.value);
         if k == 0 {
             continue;
         }

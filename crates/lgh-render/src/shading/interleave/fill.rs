@@ -184,18 +184,7 @@ mod tests {
                 }
             })
             .collect();
-        GBuffer {
-            width: w,
-            height: h,
-            position,
-            geo_normal: normal.clone(),
-            normal,
-            albedo: vec![Vec3::ONE; n],
-            depth,
-            emission: vec![Vec3::ZERO; n],
-            view: None,
-            deferred: Default::default(),
-        }
+        GBuffer::from_planes((w, h), position, normal, depth)
     }
 
     /// Under 4 x 4 interleaving the pole's pixels reach only the 4 sub-images of their
@@ -207,11 +196,7 @@ mod tests {
     fn a_pole_one_pixel_wide_fills_the_sub_images_it_misses() {
         let (w, h, x_pole, n) = (24u32, 16u32, 9u32, 4u32);
         let g = pole(w, h, x_pole);
-        let p = BlurParams {
-            phases: n,
-            ..BlurParams::defaults()
-        }
-        .recombination();
+        let p = BlurParams::defaults().with_phases(n).recombination();
         let disc = discontinuities(&g, &p);
         let missed = missed_sub_images(&g, &disc, &p, DEFAULT_FILL_BELOW).unwrap();
         let column: u64 = (0..n).map(|sy| 1u64 << (sy * n + x_pole % n)).sum();

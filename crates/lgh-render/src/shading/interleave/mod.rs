@@ -174,6 +174,12 @@ impl BlurParams {
         }
     }
 
+    /// This blur for n x n interleaving: walks averaged over n phases.
+    #[must_use]
+    pub fn with_phases(self, n: u32) -> Self {
+        Self { phases: n, ..self }
+    }
+
     /// The narrowest blur that recombines the sub-images, for the unshadowed sum A: radius
     /// n / 2 (at least 1), whose phase-balanced weights give each of the n x n sub-images
     /// the same weight 1 / n^2 (at n = 4 the taps weigh (1/2, 1, 1, 1, 1/2) / 4 per axis).

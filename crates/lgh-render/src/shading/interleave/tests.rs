@@ -30,18 +30,7 @@ fn two_planes(w: u32, h: u32, split: u32) -> GBuffer {
             position[i] = Vec3::new(x as f32 * 0.01, y as f32 * 0.01, -depth[i]);
         }
     }
-    GBuffer {
-        width: w,
-        height: h,
-        position,
-        normal: vec![Vec3::Z; n],
-        geo_normal: vec![Vec3::Z; n],
-        albedo: vec![Vec3::ONE; n],
-        depth,
-        emission: vec![Vec3::ZERO; n],
-        view: None,
-        deferred: Default::default(),
-    }
+    GBuffer::from_planes((w, h), position, vec![Vec3::Z; n], depth)
 }
 
 #[test]
@@ -83,10 +72,7 @@ const EDGE: (u32, u32, u32, u32) = (40, 24, 17, 4);
 fn edge_blur() -> (GBuffer, BlurParams, Vec<u8>) {
     let (w, h, split, n) = EDGE;
     let g = two_planes(w, h, split);
-    let p = BlurParams {
-        phases: n,
-        ..BlurParams::defaults()
-    };
+    let p = BlurParams::defaults().with_phases(n);
     let disc = discontinuities(&g, &p);
     (g, p, disc)
 }
@@ -159,10 +145,7 @@ fn the_recombination_of_a_stops_at_creases() {
     let img: Vec<Vec3> = (0..(w * h) as usize)
         .map(|i| Vec3::splat(face(i as u32 % w)))
         .collect();
-    let p = BlurParams {
-        phases: n,
-        ..BlurParams::defaults()
-    };
+    let p = BlurParams::defaults().with_phases(n);
     let out = blur(&img, &g, &discontinuities(&g, &p), &p.recombination());
     for (i, v) in out.iter().enumerate() {
         let x = i as u32 % w;
@@ -345,10 +328,7 @@ fn walks_stop_where_the_key_of_a_moves() {
 fn the_stop_on_a_passes_over_the_noise_of_the_sub_images() {
     let (w, h, n, step) = (100u32, 40u32, 4u32, 50u32);
     let g = two_planes(w, h, w);
-    let p = BlurParams {
-        phases: n,
-        ..BlurParams::defaults()
-    };
+    let p = BlurParams::defaults().with_phases(n);
     let disc = discontinuities(&g, &p);
     // Uniform in 0.8..1.2, a hash of the pixel.
     let noise = |i: usize| {
