@@ -156,9 +156,11 @@ pub(super) fn shade_rows(
                 }
             }
             // The tile's guests that miss this sub-image, with its light batch (the tile's
-            // pixels of the sub-image share it: the same key as its first pixel's).
+            // pixels of the sub-image share it: the same key as its first pixel's; where the
+            // image ends inside the tile before the sub-image has a pixel there, the key of
+            // the pixel it would have, in the same tile).
             let bit = 1u64 << (sy * n + sx);
-            if first_x < x1 && first_y < y1 && scratch.guests.iter().any(|g| g.2 & bit != 0) {
+            if scratch.guests.iter().any(|g| g.2 & bit != 0) {
                 let key = ctx.bins.tile_key(first_x as u32, first_y as u32);
                 if scratch.batch.key != Some(key) {
                     let lights = ctx.bins.lights_at(first_x as u32, first_y as u32);
