@@ -566,7 +566,7 @@ fn lighting_loop<'c>(
             rays: result.par_chunks(3).map(|p| p[1].w as u64).sum(),
         },
         // The GPU's loop does not fill cut recombination windows yet.
-        fill: None,
+        filled: None,
         timings: gpu_timings(&gpu, start, upload_ms, 0.0, &before),
     })
 }

@@ -163,8 +163,9 @@ pub struct LoopResult {
     pub overdraw: Vec<u32>,
     /// S, U and the rays traced.
     pub estimates: ShadowEstimates,
-    /// What the pixels that fill their recombination windows shaded (the CPU's loop).
-    pub fill: Option<WindowFill>,
+    /// Per pixel, what it shaded as a guest of the sub-images its recombination window
+    /// misses (the CPU's loop, where any pixel fills its window).
+    pub filled: Option<Vec<Vec3>>,
     /// Timings of the loop's passes ("lighting", "shadow_targets", "shadow_rays").
     pub timings: Timings,
 }
@@ -500,10 +501,10 @@ impl LghFrame {
         LoopResult {
             a: shaded.par_iter().map(|p| p.0).collect(),
             overdraw: shaded.par_iter().map(|p| p.1).collect(),
-            fill: self.missed.as_ref().map(|missed| WindowFill {
-                missed: missed.clone(),
-                filled: shaded.par_iter().map(|p| p.2).collect(),
-            }),
+            filled: self
+                .missed
+                .is_some()
+                .then(|| shaded.par_iter().map(|p| p.2).collect()),
             estimates,
             timings,
         }
@@ -525,7 +526,7 @@ impl LghFrame {
     /// [`LghFrame::finish`] with the a-trous filter of `atrous` where given (the GPU's).
     #[must_use]
     pub fn finish_with(
-        self,
+        mut self,
         inputs: &MethodInputs,
         shaded: LoopResult,
         memory: &mut FrameMemory,
@@ -536,11 +537,15 @@ impl LghFrame {
             a,
             overdraw,
             estimates,
-            fill,
+            filled,
             timings,
         } = shaded;
         let mut t = timings;
         let (world, g) = (inputs.world, inputs.gbuffer);
+        let fill = match (self.missed.take(), filled) {
+            (Some(missed), Some(filled)) => Some(WindowFill { missed, filled }),
+            _ => None,
+        };
         let a = Unshadowed { a, fill };
         let shadowed =
             shadowed_indirect_with(world, g, a, estimates, &filter, &mut t, memory, atrous);
