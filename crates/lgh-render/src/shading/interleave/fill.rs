@@ -23,7 +23,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::{BlurParams, runs};
+use super::{BlurParams, runs, sub_image_of};
 use crate::passes::gbuffer::GBuffer;
 
 /// The default of [`crate::methods::lgh::LghSettings::fill_below`]: a pixel whose window
@@ -80,10 +80,10 @@ impl Walks {
     }
 }
 
-/// The sub-image (x mod n, y mod n) of pixel `i` as a bit.
+/// The sub-image of pixel `i` of an image `w` pixels wide ([`sub_image_of`]).
 #[inline]
-fn bit(i: usize, w: usize, n: usize) -> u64 {
-    1 << ((i / w % n) * n + i % w % n)
+fn sub_image(i: usize, w: usize, n: usize) -> usize {
+    sub_image_of((i % w) as u32, (i / w) as u32, n as u32)
 }
 
 /// Per pixel, the sub-images its recombination window misses (bit s = sy n + sx), where it
@@ -108,7 +108,7 @@ pub fn missed_sub_images(g: &GBuffer, disc: &[u8], p: &BlurParams, below: f32) -
                 return 0;
             }
             let mut reached = 0u64;
-            walks.taps(i, w, |j, _, _| reached |= bit(j, w, n));
+            walks.taps(i, w, |j, _, _| reached |= 1 << sub_image(j, w, n));
             if (reached.count_ones() as f32) < limit {
                 all & !reached
             } else {
@@ -144,7 +144,7 @@ pub fn recombine_filled(
         let mut sum = [Vec3::ZERO; MAX_SUB_IMAGES];
         let mut wsum = [0.0f32; MAX_SUB_IMAGES];
         walks.taps(i, w, |j, dx, dy| {
-            let s = (j / w % n) * n + j % w % n;
+            let s = sub_image(j, w, n);
             let wt = weight(dx) * weight(dy);
             sum[s] += raw[j] * wt;
             wsum[s] += wt;
