@@ -86,7 +86,7 @@ pub enum BenchWhat {
     /// exact brute force on each scene (rel_rmse, FLIP, bias, time), the convergence of
     /// `--accumulate`, and a log-log plot of error against time.
     #[command(allow_negative_numbers = true)]
-    Quality(crate::bench_quality::QualityBenchArgs),
+    Quality(Box<crate::bench_quality::QualityBenchArgs>),
     /// Flicker of a static view with VPLs regenerated every frame, without and with temporal
     /// filtering (LGH paper 4.3), and the time per frame.
     #[command(allow_negative_numbers = true)]

@@ -20,8 +20,8 @@ use crate::bench_quality::{Point, QualityBenchArgs, indirect_only, measure, ms, 
 use crate::bench_reference::{print_references, reference, settings_json};
 
 /// The curves of the sweep: (series name, the method it belongs to, settings without the
-/// VPL count): lgh at each of `--alphas` x `--interleaves` x `--shadow-samples`, slc at each
-/// of `--error-bounds` x `--shadow-samples`. A curve is named after its method and the
+/// VPL count), at each of `--vpl-clamps`: lgh at each of `--alphas` x `--interleaves` x
+/// `--shadow-samples`, slc at each of `--error-bounds` x `--shadow-samples`. A curve is named after its method and the
 /// settings where it departs from the method's defaults (`lgh`, `lgh alpha 2 n=4 k=3`).
 fn curves(args: &QualityBenchArgs) -> Vec<(String, &'static str, RenderSettings)> {
     let base = indirect_only(args.size, 0);
@@ -39,51 +39,62 @@ fn curves(args: &QualityBenchArgs) -> Vec<(String, &'static str, RenderSettings)
     };
     let mut out = Vec::new();
     let lgh_n = lgh_render::methods::lgh::DEFAULT_INTERLEAVE;
-    for &alpha in args.alphas.iter() {
-        for &n in args.interleaves.iter() {
+    // Both methods' curves at each clamp; named "c=C" where C is not the render default.
+    let clamped = |parts: &mut Vec<String>, s: &mut RenderSettings, c: f64| {
+        if c as f32 != s.vpl_clamp {
+            parts.push(format!("c={c}"));
+        }
+        s.vpl_clamp = c as f32;
+    };
+    for &c in args.vpl_clamps.iter() {
+        for &alpha in args.alphas.iter() {
+            for &n in args.interleaves.iter() {
+                for &k in &ks {
+                    let mut s = RenderSettings {
+                        method: LGH,
+                        ..base.clone()
+                    };
+                    let mut parts = Vec::new();
+                    if s.lgh.alpha != alpha as f32 {
+                        parts.push(format!("alpha {alpha}"));
+                    }
+                    s.lgh.alpha = alpha as f32;
+                    if n != lgh_n {
+                        parts.push(format!("n={n}"));
+                        s.tiling.interleave = Some(n);
+                    }
+                    if let Some(k) = k {
+                        if k != LGH.get().default_shadow_samples() {
+                            parts.push(format!("k={k}"));
+                        }
+                        s.shadows.samples = Some(k);
+                    }
+                    clamped(&mut parts, &mut s, c);
+                    out.push((named("lgh", parts), "lgh", s));
+                }
+            }
+        }
+        for &bound in args.error_bounds.iter() {
             for &k in &ks {
                 let mut s = RenderSettings {
-                    method: LGH,
+                    method: SLC,
+                    error_bound: Some(bound as f32),
                     ..base.clone()
                 };
                 let mut parts = Vec::new();
-                if s.lgh.alpha != alpha as f32 {
-                    parts.push(format!("alpha {alpha}"));
-                }
-                s.lgh.alpha = alpha as f32;
-                if n != lgh_n {
-                    parts.push(format!("n={n}"));
-                    s.tiling.interleave = Some(n);
+                // Compared as the f32 the settings hold (0.0005 has no exact binary form).
+                if bound as f32 != lgh_render::methods::slc::DEFAULT_ERROR_BOUND {
+                    parts.push(format!("eb={bound}"));
                 }
                 if let Some(k) = k {
-                    if k != LGH.get().default_shadow_samples() {
+                    if k != SLC.get().default_shadow_samples() {
                         parts.push(format!("k={k}"));
                     }
                     s.shadows.samples = Some(k);
                 }
-                out.push((named("lgh", parts), "lgh", s));
+                clamped(&mut parts, &mut s, c);
+                out.push((named("slc", parts), "slc", s));
             }
-        }
-    }
-    for &bound in args.error_bounds.iter() {
-        for &k in &ks {
-            let mut s = RenderSettings {
-                method: SLC,
-                error_bound: Some(bound as f32),
-                ..base.clone()
-            };
-            let mut parts = Vec::new();
-            // Compared as the f32 the settings hold (0.0005 has no exact binary form).
-            if bound as f32 != lgh_render::methods::slc::DEFAULT_ERROR_BOUND {
-                parts.push(format!("eb={bound}"));
-            }
-            if let Some(k) = k {
-                if k != SLC.get().default_shadow_samples() {
-                    parts.push(format!("k={k}"));
-                }
-                s.shadows.samples = Some(k);
-            }
-            out.push((named("slc", parts), "slc", s));
         }
     }
     out
@@ -147,7 +158,7 @@ fn vpls_of(p: &Point) -> usize {
 }
 
 /// True if `series` is a curve of `method` (`lgh`, `lgh alpha 2`).
-fn of_method(series: &str, method: &str) -> bool {
+pub(crate) fn of_method(series: &str, method: &str) -> bool {
     series == method
         || series
             .strip_prefix(method)
@@ -278,7 +289,7 @@ pub fn run(args: &QualityBenchArgs, scenes: &[PathBuf], threads: usize) -> Resul
     if args.references_only {
         return print_references(args, &convergence, &paths);
     }
-    crate::bench_plot::plot(&args.plot, &names, &points)?;
+    crate::bench_plot::plot(&args.plot, &names, &points, &["lgh", "slc"])?;
     let rows = table(&points, &names, &args.budgets);
     if args.options.json {
         let mut v = settings_json(args);
@@ -502,10 +513,30 @@ mod tests {
         assert_eq!(c[5].2.shadows.samples, Some(5));
         // Each curve counts for its own method in the table.
         assert!(c.iter().all(|(name, method, _)| of_method(name, method)));
+        // Each clamp crosses both methods' curves.
+        let clamps = parsed(&[
+            "--interleaves",
+            "4",
+            "--shadow-samples",
+            "3",
+            "--vpl-clamps",
+            "4,2",
+        ]);
+        assert_eq!(
+            names(&clamps),
+            ["lgh n=4 k=3", "slc k=3", "lgh n=4 k=3 c=2", "slc k=3 c=2"]
+        );
+        let c = curves(&clamps);
+        assert_eq!(c[0].2.vpl_clamp, 4.0);
+        assert_eq!((c[2].2.vpl_clamp, c[3].2.vpl_clamp), (2.0, 2.0));
+        assert!(c.iter().all(|(name, method, _)| of_method(name, method)));
         for bad in [
             &["--interleaves", "0"][..],
             &["--interleaves", ""],
             &["--shadow-samples", "17"],
+            &["--vpl-clamps", "0"],
+            &["--vpl-clamps", ""],
+            &["--vpl-clamps", "nan"],
         ] {
             assert!(try_parsed(bad).is_err(), "{bad:?}");
         }

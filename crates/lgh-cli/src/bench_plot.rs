@@ -1,6 +1,7 @@
 //! The plot of `lgh bench quality`: error against time, log-log, one column per scene, FLIP
-//! above and rel_rmse below, one curve per method (plotters, drawn into memory and written
-//! as PNG). Text needs a TrueType font: DejaVu Sans from the system (Debian's
+//! above and rel_rmse below, one curve per series, or with fronts (the equal-time plot) one
+//! bold curve per method, its lowest error within each time over all of its series, over
+//! its series drawn thin (plotters, drawn into memory and written as PNG). Text needs a TrueType font: DejaVu Sans from the system (Debian's
 //! `fonts-dejavu-core`), or the file `LGH_FONT` names; without one the plot has no labels.
 
 use std::path::Path;
@@ -103,19 +104,58 @@ const COLOURS: [RGBColor; 12] = [
     RGBColor(0, 0, 0),
 ];
 
-/// Draws the plot of `points` for `scenes` into `path`.
+/// The lowest error reachable within each time: of the (ms, error) points, those whose
+/// error is below that of every faster point, by time, as a staircase (each point's error
+/// holds until the next point's time).
+#[must_use]
+pub fn front(points: impl IntoIterator<Item = (f64, f64)>) -> Vec<(f64, f64)> {
+    let mut all: Vec<(f64, f64)> = points.into_iter().collect();
+    all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let mut steps: Vec<(f64, f64)> = Vec::new();
+    for (ms, e) in all {
+        match steps.last() {
+            Some(&(_, best)) if e >= best => {}
+            Some(&(_, best)) => steps.extend([(ms, best), (ms, e)]),
+            None => steps.push((ms, e)),
+        }
+    }
+    steps
+}
+
+/// Draws the plot of `points` for `scenes` into `path`: one curve per series, or, where
+/// `fronts` names methods, one bold [`front`] per method over its series drawn thin (a
+/// series belongs to the method its name starts with, as the equal-time table counts it).
 ///
 /// # Errors
 /// Drawing fails, or the file cannot be written.
-pub fn plot(path: &Path, scenes: &[String], points: &[Point]) -> Result<()> {
+pub fn plot(path: &Path, scenes: &[String], points: &[Point], fronts: &[&str]) -> Result<()> {
     let text = register_font();
     let (cw, ch) = (420u32, 320u32);
-    let mut names: Vec<&str> = Vec::new();
+    let mut series: Vec<&str> = Vec::new();
     for p in points {
-        if !names.contains(&p.series.as_str()) && p.ms > 0.0 && p.flip > 0.0 {
-            names.push(&p.series);
+        if !series.contains(&p.series.as_str()) && p.ms > 0.0 && p.flip > 0.0 {
+            series.push(&p.series);
         }
     }
+    // The legend's names and the colour of each series (its method's where fronts are drawn).
+    let method_of = |name: &str| {
+        fronts
+            .iter()
+            .position(|m| crate::bench_equal_time::of_method(name, m))
+    };
+    let names: Vec<&str> = if fronts.is_empty() {
+        series.clone()
+    } else {
+        fronts.to_vec()
+    };
+    let colour_of = |i: usize, name: &str| {
+        let at = if fronts.is_empty() {
+            Some(i)
+        } else {
+            method_of(name)
+        };
+        at.map(|k| COLOURS[k % COLOURS.len()])
+    };
     // Room for every curve's name in the legend.
     let w = (cw * scenes.len().max(1) as u32).max(170 * names.len().max(8) as u32);
     let h = 2 * ch + 40;
@@ -138,6 +178,15 @@ pub fn plot(path: &Path, scenes: &[String], points: &[Point]) -> Result<()> {
                     ))
                     .map_err(|e| anyhow!("plot: {e}"))?;
             }
+        }
+        if text && !fronts.is_empty() {
+            legend
+                .draw(&Text::new(
+                    "bold: each method's lowest error within each time; thin: its curves",
+                    (10 + 170 * names.len() as i32, 12),
+                    ("sans-serif", 14),
+                ))
+                .map_err(|e| anyhow!("plot: {e}"))?;
         }
         let rows = body.split_evenly((2, scenes.len().max(1)));
         for (k, area) in rows.iter().enumerate() {
@@ -189,19 +238,39 @@ pub fn plot(path: &Path, scenes: &[String], points: &[Point]) -> Result<()> {
                 mesh.disable_x_axis().disable_y_axis();
             }
             mesh.draw().map_err(|e| anyhow!("plot: {e}"))?;
-            for (i, name) in names.iter().enumerate() {
-                let c = COLOURS[i % COLOURS.len()];
+            for (i, name) in series.iter().enumerate() {
+                let Some(c) = colour_of(i, name) else {
+                    continue;
+                };
                 let mut curve: Vec<(f64, f64)> = pts
                     .iter()
                     .filter(|p| p.series == *name)
                     .map(|p| (p.ms, metric(p)))
                     .collect();
                 curve.sort_by(|a, b| a.0.total_cmp(&b.0));
+                // Under fronts, each series thin and pale.
+                let (line, dot) = if fronts.is_empty() {
+                    (c.stroke_width(2), c.filled())
+                } else {
+                    (c.mix(0.3).stroke_width(1), c.mix(0.3).filled())
+                };
+                let r = if fronts.is_empty() { 3 } else { 2 };
                 chart
-                    .draw_series(LineSeries::new(curve.clone(), c.stroke_width(2)))
+                    .draw_series(LineSeries::new(curve.clone(), line))
                     .map_err(|e| anyhow!("plot: {e}"))?;
                 chart
-                    .draw_series(curve.iter().map(|&p| Circle::new(p, 3, c.filled())))
+                    .draw_series(curve.iter().map(|&p| Circle::new(p, r, dot)))
+                    .map_err(|e| anyhow!("plot: {e}"))?;
+            }
+            for (k, method) in fronts.iter().enumerate() {
+                let c = COLOURS[k % COLOURS.len()];
+                let steps = front(
+                    pts.iter()
+                        .filter(|p| crate::bench_equal_time::of_method(&p.series, method))
+                        .map(|p| (p.ms, metric(p))),
+                );
+                chart
+                    .draw_series(LineSeries::new(steps, c.stroke_width(3)))
                     .map_err(|e| anyhow!("plot: {e}"))?;
             }
         }
@@ -218,7 +287,33 @@ pub fn plot(path: &Path, scenes: &[String], points: &[Point]) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::{decade_label, leading_125_within};
+    use super::{decade_label, front, leading_125_within};
+
+    /// The front keeps only points that lower the error, as a staircase, whatever their
+    /// order.
+    #[test]
+    fn the_front_is_the_best_error_within_each_time() {
+        let pts = [
+            (200.0, 0.05),
+            (50.0, 0.1),
+            (100.0, 0.12),
+            (400.0, 0.06),
+            (300.0, 0.04),
+        ];
+        assert_eq!(
+            front(pts),
+            [
+                (50.0, 0.1),
+                (200.0, 0.1),
+                (200.0, 0.05),
+                (300.0, 0.05),
+                (300.0, 0.04)
+            ]
+        );
+        assert!(front([]).is_empty());
+        // Equal times: the lower error counts.
+        assert_eq!(front([(10.0, 0.2), (10.0, 0.1)]), [(10.0, 0.1)]);
+    }
 
     /// Only 1, 2 and 5 times a power of ten are labelled, unless the axis has fewer than two.
     #[test]

@@ -64,6 +64,12 @@ pub struct QualityBenchArgs {
     /// slc's default alone).
     #[arg(long, default_value = "0.0005", value_parser = parse_error_bounds)]
     pub error_bounds: Budgets,
+    /// --equal-time: the VPL clamp's C (`--vpl-clamp`), comma-separated, each its own curve
+    /// for both methods (default: the render default alone). A smaller C clamps less
+    /// near-field light (less darkening in corners) at the price of more VPL noise; where
+    /// the best trade lies depends on the scene and the VPL count (docs/design.md, "Clamps").
+    #[arg(long, default_value = "4", value_parser = parse_vpl_clamps)]
+    pub vpl_clamps: Budgets,
     /// --equal-time: lgh's n x n interleavings, comma-separated, each its own curve with
     /// every alpha and shadow-sample count (its default 2, and 4: a quarter of the lights a
     /// pixel, for the small budgets). slc keeps its own 8, cheaper than any smaller n and
@@ -321,6 +327,12 @@ fn parse_shadow_samples(s: &str) -> Result<Counts, String> {
     .map(Counts)
 }
 
+/// Parses `4,2` into VPL clamp constants C (each above 0 and at most 1000, as
+/// `--vpl-clamp`; 0, the fixed clamp, is the reference's and not a curve).
+fn parse_vpl_clamps(s: &str) -> Result<Budgets, String> {
+    parse_positive(s, "VPL clamp C", 1000.0)
+}
+
 /// Parses `0.0005,0.002` into slc's error bounds.
 fn parse_error_bounds(s: &str) -> Result<Budgets, String> {
     parse_positive(s, "error bound", 1.0)
@@ -476,7 +488,7 @@ pub fn run(args: &QualityBenchArgs) -> Result<()> {
         });
         scene_names.push(name);
     }
-    crate::bench_plot::plot(&args.plot, &scene_names, &points)?;
+    crate::bench_plot::plot(&args.plot, &scene_names, &points, &[])?;
     if args.options.json {
         let v = serde_json::json!({
             "threads": threads,
