@@ -39,12 +39,20 @@ fn curves(args: &QualityBenchArgs) -> Vec<(String, &'static str, RenderSettings)
     };
     let mut out = Vec::new();
     let lgh_n = lgh_render::methods::lgh::DEFAULT_INTERLEAVE;
-    // Both methods' curves at each clamp; named "c=C" where C is not the render default.
-    let clamped = |parts: &mut Vec<String>, s: &mut RenderSettings, c: f64| {
+    // The shadow samples and the clamp of a curve (named "k=K", "c=C" where they are not
+    // its method's and the render's defaults): both methods' curves at each clamp.
+    let finish = |mut parts: Vec<String>, mut s: RenderSettings, k: Option<u32>, c: f64| {
+        if let Some(k) = k {
+            if k != s.method.get().default_shadow_samples() {
+                parts.push(format!("k={k}"));
+            }
+            s.shadows.samples = Some(k);
+        }
         if c as f32 != s.vpl_clamp {
             parts.push(format!("c={c}"));
         }
         s.vpl_clamp = c as f32;
+        (parts, s)
     };
     for &c in args.vpl_clamps.iter() {
         for &alpha in args.alphas.iter() {
@@ -63,20 +71,14 @@ fn curves(args: &QualityBenchArgs) -> Vec<(String, &'static str, RenderSettings)
                         parts.push(format!("n={n}"));
                         s.tiling.interleave = Some(n);
                     }
-                    if let Some(k) = k {
-                        if k != LGH.get().default_shadow_samples() {
-                            parts.push(format!("k={k}"));
-                        }
-                        s.shadows.samples = Some(k);
-                    }
-                    clamped(&mut parts, &mut s, c);
+                    let (parts, s) = finish(parts, s, k, c);
                     out.push((named("lgh", parts), "lgh", s));
                 }
             }
         }
         for &bound in args.error_bounds.iter() {
             for &k in &ks {
-                let mut s = RenderSettings {
+                let s = RenderSettings {
                     method: SLC,
                     error_bound: Some(bound as f32),
                     ..base.clone()
@@ -86,13 +88,7 @@ fn curves(args: &QualityBenchArgs) -> Vec<(String, &'static str, RenderSettings)
                 if bound as f32 != lgh_render::methods::slc::DEFAULT_ERROR_BOUND {
                     parts.push(format!("eb={bound}"));
                 }
-                if let Some(k) = k {
-                    if k != SLC.get().default_shadow_samples() {
-                        parts.push(format!("k={k}"));
-                    }
-                    s.shadows.samples = Some(k);
-                }
-                clamped(&mut parts, &mut s, c);
+                let (parts, s) = finish(parts, s, k, c);
                 out.push((named("slc", parts), "slc", s));
             }
         }
