@@ -509,6 +509,11 @@ mod tests {
         assert_eq!(c[5].2.shadows.samples, Some(5));
         // Each curve counts for its own method in the table.
         assert!(c.iter().all(|(name, method, _)| of_method(name, method)));
+        // The default clamp is the render's alone (its curves carry no "c=").
+        assert_eq!(
+            *parsed(&[]).vpl_clamps,
+            [f64::from(lgh_render::settings::DEFAULT_VPL_CLAMP)]
+        );
         // Each clamp crosses both methods' curves.
         let clamps = parsed(&[
             "--interleaves",
