@@ -21,8 +21,9 @@ use crate::bench_reference::{print_references, reference, settings_json};
 
 /// The curves of the sweep: (series name, the method it belongs to, settings without the
 /// VPL count), at each of `--vpl-clamps`: lgh at each of `--alphas` x `--interleaves` x
-/// `--shadow-samples`, slc at each of `--error-bounds` x `--shadow-samples`. A curve is named after its method and the
-/// settings where it departs from the method's defaults (`lgh`, `lgh alpha 2 n=4 k=3`).
+/// `--shadow-samples`, slc at each of `--error-bounds` x `--shadow-samples`. A curve is
+/// named after its method and the settings where it departs from the method's defaults
+/// (`lgh`, `lgh alpha 2 n=4 k=3`, `slc k=3 c=2`).
 fn curves(args: &QualityBenchArgs) -> Vec<(String, &'static str, RenderSettings)> {
     let base = indirect_only(args.size, 0);
     // None: the method's own number of shadow samples.

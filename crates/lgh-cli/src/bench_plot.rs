@@ -1,8 +1,9 @@
 //! The plot of `lgh bench quality`: error against time, log-log, one column per scene, FLIP
 //! above and rel_rmse below, one curve per series, or with fronts (the equal-time plot) one
 //! bold curve per method, its lowest error within each time over all of its series, over
-//! its series drawn thin (plotters, drawn into memory and written as PNG). Text needs a TrueType font: DejaVu Sans from the system (Debian's
-//! `fonts-dejavu-core`), or the file `LGH_FONT` names; without one the plot has no labels.
+//! its series drawn thin (plotters, drawn into memory and written as PNG). Text needs a
+//! TrueType font: DejaVu Sans from the system (Debian's `fonts-dejavu-core`), or the file
+//! `LGH_FONT` names; without one the plot has no labels.
 
 use std::path::Path;
 
