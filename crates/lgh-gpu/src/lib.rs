@@ -8,8 +8,9 @@
 //! hardware is needed); the brute-force reference ([`brute::BRUTE_GPU`],
 //! [`brute::BRUTE_UNSHADOWED_GPU`]), which checks the GPU's rays and shading against the
 //! CPU's; `lgh` with its lighting loop, shadow-sample selection, unbiased shadow targets and
-//! shadow rays ([`lgh::LGH_GPU`]) followed by the interleaving blur ([`interleave`]) and the
-//! ratio estimator ([`ratio`], [`atrous`]); the direct light of both ([`direct`]); and the
+//! shadow rays ([`lgh::LGH_GPU`]) followed by the interleaving blur ([`interleave`], with the
+//! filling of cut recombination windows, [`fill`]) and the ratio estimator ([`ratio`],
+//! [`atrous`]); the direct light of both ([`direct`]); and the
 //! lighting grid hierarchy with its S_1 lights' representatives ([`grid`], built with an
 //! integer prefix sum, [`scan`]). The frame's passes before shading run here too: primary
 //! rays into the G-buffer ([`primary`], with the scene's [`surfaces`]), VPL generation by
@@ -37,6 +38,7 @@ pub mod brute;
 pub mod direct;
 pub mod display;
 pub mod edges;
+pub mod fill;
 pub mod lgh;
 pub mod primary;
 pub mod ratio;

@@ -64,7 +64,7 @@ fn both(
     let gbuffer = ctx.gbuffer(&g).expect("G-buffer");
     let first = lgh_gpu::Batch::new(ctx);
     let mut bins =
-        lgh_gpu::bins::record(ctx, first, &g, &camera, &gbuffer, &sp, None).expect("bins");
+        lgh_gpu::bins::record(ctx, first, &g, &camera, &gbuffer, &sp, None, None).expect("bins");
     let words = bins.layout.words(g.len());
     bins.batch
         .read(bins.lists.buffer(), 4 * words)

@@ -32,6 +32,7 @@ fn every_shader_is_valid_wgsl() {
     .chain(lgh_gpu::lgh::light_table_sources())
     .chain(lgh_gpu::lgh::lookup_sources())
     .chain(lgh_gpu::bins::sources())
+    .chain(lgh_gpu::fill::sources())
     {
         validate(&source);
     }

@@ -128,8 +128,8 @@ fn gpu_lgh_over_long_light_lists_estimates_the_brute_force() {
 /// Without shadows the GPU loop sums the same lights with the same weights as the CPU's:
 /// `lgh-unshadowed` equal within rel_rmse 1e-4 (float rounding) on the same G-buffer and
 /// VPLs, on every test scene. (With the GPU's own VPLs, equal to the CPU's within 1e-4 but
-/// not bit for bit: 0.0015 on the default box.) Both without filling cut recombination
-/// windows, which the GPU's loop does not do yet (`lgh.fill_below`).
+/// not bit for bit: 0.0015 on the default box.) Both fill cut recombination windows
+/// (`lgh.fill_below`, the default; `tests/fill.rs` under 4 x 4 interleaving).
 #[test]
 #[cfg_attr(
     not(gpu_adapter),
@@ -138,14 +138,13 @@ fn gpu_lgh_over_long_light_lists_estimates_the_brute_force() {
 fn gpu_unshadowed_lgh_equals_the_cpu_one() {
     for rel in SCENES {
         let w = world(rel);
-        let mut s = RenderSettings {
+        let s = RenderSettings {
             width: 64,
             height: 36,
             vpls: 3000,
             component: Component::Indirect,
             ..RenderSettings::default()
         };
-        s.lgh.fill_below = 0.0;
         let cpu = render(&w, &s, LGH_UNSHADOWED);
         const ON_CPU_INPUTS: lgh_render::Method =
             lgh_render::Method::new(&common::OnCpuInputs(lgh_gpu::lgh::LGH_UNSHADOWED_GPU));

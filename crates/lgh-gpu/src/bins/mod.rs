@@ -55,7 +55,8 @@ struct BinParams {
     lights_base: u32,
     order_base: u32,
     list_base: u32,
-    _pad: u32,
+    /// 1 where the bounds count the guests of cut recombination windows ([`crate::fill`]).
+    fill: u32,
 }
 
 /// Where the parts of the lists buffer start, in words.
@@ -94,6 +95,9 @@ pub struct GpuBins<'c> {
     pub counts_ms: f64,
     /// The GPU's times of the first submission's passes (empty without timestamps).
     pub first: PassTimes,
+    /// The tiles: their edge in full-resolution pixels, and how many along x and y (list
+    /// l is tile (tx, ty) of sub-image s, l = s tiles_x tiles_y + ty tiles_x + tx).
+    pub tiles: [u32; 3],
 }
 
 /// The WGSL sources of the kernels: bounds, count, write, sort, pixels.
@@ -103,7 +107,11 @@ pub fn sources() -> [String; 5] {
     let reach = include_str!("../shaders/bins/reach.wgsl");
     let camera = include_str!("../shaders/camera.wgsl");
     [
-        crate::kernel(&[common, include_str!("../shaders/bins/bounds.wgsl")]),
+        crate::kernel(&[
+            common,
+            include_str!("../shaders/fill/bits.wgsl"),
+            include_str!("../shaders/bins/bounds.wgsl"),
+        ]),
         crate::kernel(&[
             common,
             camera,
@@ -179,11 +187,15 @@ fn groups(items: usize) -> u32 {
 /// `camera`: submits and waits for the counts (in `first`, after the work already recorded
 /// there), then records the lists' passes into the returned batch. The spheres as the
 /// kernels read them (centre and finite radius; sub-image with flags) are packed from
-/// `spheres` and uploaded, or are `on_gpu` already (made by the work in `first`).
+/// `spheres` and uploaded, or are `on_gpu` already (made by the work in `first`). Where
+/// pixels fill their cut recombination windows, `masks` (per pixel the sub-images it shades
+/// as a guest, [`crate::fill`], made by the work in `first`) puts the guests in the tiles'
+/// bounds, so that a sub-image's lists hold the lights that reach them.
 ///
 /// # Errors
 /// More lights, lists or list entries than the buffers or a u32 index hold (the caller
 /// bins on the CPU instead), or the GPU failed.
+#[allow(clippy::too_many_arguments)]
 pub fn record<'c>(
     ctx: &'c GpuContext,
     first: Batch<'c>,
@@ -192,6 +204,7 @@ pub fn record<'c>(
     gbuffer: &GpuGBuffer,
     spheres: &LightSpheres,
     on_gpu: Option<(Lease<'c>, Lease<'c>)>,
+    masks: Option<&Lease<'c>>,
 ) -> Result<GpuBins<'c>, GpuError> {
     let start = Instant::now();
     let n = spheres.n.max(1);
@@ -210,6 +223,7 @@ pub fn record<'c>(
         tiles_y,
         lists,
         lights,
+        fill: u32::from(masks.is_some()),
         ..BinParams::default()
     };
     let [bounds_src, count_src, write_src, sort_src, pixels_src] = sources();
@@ -236,6 +250,15 @@ pub fn record<'c>(
     let counts = ctx.output("bin counts", 4 * u64::from(lists))?;
     let starts = ctx.output("bin starts", 4 * u64::from(lists))?;
     let total = ctx.output("bin total", 16)?;
+    // Without guests the masks are not read: a word stands in.
+    let no_masks;
+    let masks = match masks {
+        Some(m) => m,
+        None => {
+            no_masks = ctx.output("no guest masks", 8)?;
+            &no_masks
+        }
+    };
     let pipeline = ctx.pipeline("bin bounds", || bounds_src);
     let bind = ctx.bind_group(
         &pipeline,
@@ -243,6 +266,7 @@ pub fn record<'c>(
             uniform.as_entire_binding(),
             gbuffer.binding(),
             bounds.binding(),
+            masks.binding(),
         ],
     );
     batch.dispatch_groups("tile_counts", &pipeline, &bind, groups(lists as usize));
@@ -320,5 +344,6 @@ pub fn record<'c>(
         layout,
         counts_ms: start.elapsed().as_secs_f64() * 1e3,
         first,
+        tiles: [tile, tiles_x, tiles_y],
     })
 }

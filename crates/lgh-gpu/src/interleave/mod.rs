@@ -88,11 +88,50 @@ pub(crate) struct Planes {
     pub params: BlurParams,
 }
 
+/// Records the discontinuities of `p` (its z and normal thresholds; the crease bits with
+/// [`BlurParams::crease_n_diff`]) of the G-buffer `g` (`gbuffer`, `width` x `height`) into
+/// `jumps` (one word a pixel), as lgh-render's `shading::interleave::discontinuities`.
+///
+/// # Errors
+/// The image exceeds one dispatch.
+pub(crate) fn record_jumps(
+    ctx: &GpuContext,
+    batch: &mut Batch<'_>,
+    (gbuffer, width, height): (&GpuGBuffer, u32, u32),
+    p: &BlurParams,
+    jumps: &Lease<'_>,
+) -> Result<(), GpuError> {
+    let pipeline = ctx.pipeline("discontinuities", discontinuities_source);
+    let uniform = batch.uniform(&JumpParams {
+        width,
+        height,
+        z_diff: p.z_diff,
+        n_diff: p.n_diff,
+        a_n_diff: p.crease_n_diff(),
+        _pad: [0.0; 3],
+    })?;
+    let bind = ctx.bind_group(
+        &pipeline,
+        vec![
+            uniform.as_entire_binding(),
+            gbuffer.binding(),
+            jumps.binding(),
+        ],
+    );
+    batch.dispatch(
+        "interleave_blur",
+        &pipeline,
+        &bind,
+        (width * height) as usize,
+    )
+}
+
 /// Records the blur of `images` (`planes` vec4s per pixel, in place through `scratch` of the
-/// same size) into `batch`: the discontinuities of `p` (the z and normal thresholds of the
-/// first group) once into `jumps`, then per group the pass along x and the pass along y,
-/// a group with a stop on A after the keys of plane 0 as the groups before left it, smoothed
-/// by the group's own walks.
+/// same size) into `batch`, with the discontinuities `jumps` of the groups' thresholds
+/// ([`record_jumps`]): per group the pass along x and the pass along y, a group with a stop
+/// on A after the keys of plane 0 as the groups before left it, smoothed by the group's own
+/// walks. Where pixels fill their cut recombination windows (`fill`), their A is made
+/// after the group that recombines A (plane 0 with the crease bits, [`crate::fill`]).
 ///
 /// # Errors
 /// A radius above [`MAX_RADIUS`], or the image exceeds one dispatch.
@@ -106,30 +145,9 @@ pub(crate) fn record<'c>(
     jumps: &Lease<'_>,
     planes: u32,
     groups: &[Planes],
+    fill: Option<&crate::fill::Fill<'_>>,
 ) -> Result<(), GpuError> {
-    let (gbuffer, width, height) = g;
-    let n = (width * height) as usize;
-    let Some(first) = groups.first() else {
-        return Ok(());
-    };
-    let pipeline = ctx.pipeline("discontinuities", discontinuities_source);
-    let uniform = batch.uniform(&JumpParams {
-        width,
-        height,
-        z_diff: first.params.z_diff,
-        n_diff: first.params.n_diff,
-        a_n_diff: first.params.crease_n_diff(),
-        _pad: [0.0; 3],
-    })?;
-    let bind = ctx.bind_group(
-        &pipeline,
-        vec![
-            uniform.as_entire_binding(),
-            gbuffer.binding(),
-            jumps.binding(),
-        ],
-    );
-    batch.dispatch("interleave_blur", &pipeline, &bind, n)?;
+    let n = (g.1 * g.2) as usize;
     let keys = ctx.output("blur keys", 4 * n as u64)?;
     let blur = Blur {
         g,
@@ -158,6 +176,9 @@ pub(crate) fn record<'c>(
             batch.keep(smooth);
         }
         blur.record(ctx, batch, images, (group.first, group.count), p)?;
+        if let Some(fill) = fill.filter(|_| group.first == 0 && p.creases) {
+            fill.record_recombine(ctx, batch, g, images, planes)?;
+        }
     }
     batch.keep(keys);
     Ok(())

@@ -43,18 +43,29 @@ pub(super) fn shade<'c>(
     let Loop {
         mut batch,
         out,
+        fill,
         gbuffer,
         start,
         upload_ms,
         before,
-        ..
     } = record_loop(ctx, inputs, tables, held)?;
     let frame = Frame {
         gbuffer: &gbuffer,
         g,
         radius: inputs.world.radius,
     };
-    let result = ratio::record(ctx, &mut batch, &frame, &out, tables.k, filter)?;
+    let result = ratio::record(
+        ctx,
+        &mut batch,
+        &frame,
+        &out,
+        tables.k,
+        filter,
+        fill.as_ref(),
+    )?;
+    if let Some(fill) = fill {
+        fill.keep_in(&mut batch);
+    }
     if let Some(shown) = shown {
         let indirect = match &result {
             Some(r) => Part::Ratio(r),

@@ -50,6 +50,7 @@ use crate::batch::{Batch, PassTimes};
 use crate::bins::GpuBins;
 use crate::context::{GpuContext, GpuError};
 use crate::display::Shown;
+use crate::fill::Fill;
 use crate::gbuffer::GpuGBuffer;
 use crate::pool::Lease;
 use chain::Shaded;
@@ -295,25 +296,39 @@ fn frame(
         None => (None, None),
     };
     // The tile binning on the GPU; lists larger than its buffers on the CPU (and the
-    // table, whose making may not have been submitted, packed on the CPU).
+    // table, whose making may not have been submitted, packed on the CPU). Before it, the
+    // masks of the pixels that fill their cut recombination windows, whose guests count in
+    // the tiles' bounds (where the GPU runs the blur; [`crate::fill`]).
     let gbuffer = ctx.gbuffer(g).map_err(fail)?;
+    let filter = frame.ratio_filter(inputs);
+    let mut fill = match filter.interleave_blur {
+        Some(p) if crate::ratio::supported(&filter) => {
+            let size = (&*gbuffer, g.width, g.height);
+            let below = inputs.settings.lgh.fill_below;
+            Fill::record_masks(ctx, &mut first, size, &p, below).map_err(fail)?
+        }
+        _ => None,
+    };
     let sp = frame.spheres();
-    let bins = match crate::bins::record(ctx, first, g, inputs.camera, &gbuffer, &sp, spheres) {
+    let masks = fill.as_ref().map(Fill::masks);
+    let bins = crate::bins::record(ctx, first, g, inputs.camera, &gbuffer, &sp, spheres, masks);
+    let bins = match bins {
         Ok(bins) => Some(bins),
         Err(GpuError::TooLarge(_)) if !frame.lights_on_cpu() => return Err(Attempt::Again),
         Err(GpuError::TooLarge(_)) => {
+            // The CPU's lists hold no guests: the frame does not fill.
             frame.bin_on_cpu(&planes_on_cpu(inputs)?, memory);
-            table = None;
+            (table, fill) = (None, None);
             None
         }
         Err(e) => return Err(fail(e).into()),
     };
     let tables = frame.tables(g.width, g.height).ok_or_else(missing_tables)?;
-    let filter = frame.ratio_filter(inputs);
     let held = OnGpu {
         bins,
         hierarchies,
         lights: table,
+        fill,
         before: Vec::new(),
     };
     // A buffer past the adapter's limits with the grids on the GPU (the lookups' slots
@@ -389,6 +404,7 @@ pub fn supported(s: &LghSettings) -> Result<(), RenderError> {
 #[must_use]
 pub fn source() -> String {
     crate::kernel(&[
+        include_str!("../shaders/shaded_light.wgsl"),
         include_str!("../shaders/lgh.wgsl"),
         include_str!("../shaders/bvh.wgsl"),
     ])
@@ -402,6 +418,9 @@ pub(super) struct OnGpu<'c> {
     pub hierarchies: Vec<Option<crate::grid::Held<'c>>>,
     /// The shaded lights' table, where the GPU made it ([`lights::record`]).
     pub lights: Option<Lease<'c>>,
+    /// The masks of the pixels that fill their cut recombination windows, where they do
+    /// (and the lists were binned on the GPU with their guests).
+    pub fill: Option<Fill<'c>>,
     /// Submissions before the loop's, by name, with their wall times in milliseconds.
     pub before: Vec<(&'static str, f64)>,
 }
@@ -411,6 +430,8 @@ pub(super) struct Loop<'c> {
     pub batch: Batch<'c>,
     /// Per pixel: A (w: overdraw), S (w: rays), U.
     pub out: Lease<'c>,
+    /// The filling of cut recombination windows, its guests recorded after the loop.
+    pub fill: Option<Fill<'c>>,
     pub gbuffer: Arc<GpuGBuffer>,
     /// When the frame's GPU work began, and the milliseconds spent packing and uploading.
     pub start: Instant,
@@ -433,6 +454,7 @@ pub(super) fn record_loop<'c>(
         bins,
         hierarchies,
         lights,
+        mut fill,
         mut before,
     } = held;
     let start = Instant::now();
@@ -440,18 +462,19 @@ pub(super) fn record_loop<'c>(
     let n = g.len();
     let scene = ctx.scene(inputs.world)?;
     let packed = Tables::new(tables, lights.is_none())?;
-    let (mut batch, lists, layout) = match (bins, &tables.bins) {
+    let (mut batch, lists, layout, tiles) = match (bins, &tables.bins) {
         (Some(b), _) => {
             // The first submission on the wall clock; the shaded lights' table's share of
             // it from the GPU's timestamps, where it has them.
             before.push(("tile_counts", b.counts_ms));
             before.extend(b.first.iter().filter(|(name, _)| *name == "light_table"));
-            (b.batch, b.lists, b.layout)
+            (b.batch, b.lists, b.layout, Some(b.tiles))
         }
         (None, Some(flat)) => (
             Batch::new(ctx),
             ctx.upload_parts("light lists", &packed.list_parts(flat))?,
             Tables::list_layout(flat),
+            None,
         ),
         (None, None) => {
             return Err(GpuError::Failed(
@@ -478,12 +501,26 @@ pub(super) fn record_loop<'c>(
     resources.push(out.binding());
     let bind = ctx.bind_group(&pipeline, resources);
     batch.dispatch("lighting", &pipeline, &bind, n)?;
+    // The guests of cut windows, from the lists binned with them (on the GPU).
+    match (&mut fill, tiles) {
+        (Some(f), Some(tiles)) => {
+            let lists = crate::fill::Lists {
+                lights: &buffers[0],
+                lists: &buffers[1],
+                list_lights: layout.lights,
+                tiles,
+            };
+            f.record_guests(ctx, &mut batch, &gbuffer, &lists, tables.eps2, &out)?;
+        }
+        _ => fill = None,
+    }
     for lease in buffers {
         batch.keep(lease);
     }
     Ok(Loop {
         batch,
         out,
+        fill,
         gbuffer,
         start,
         upload_ms: start.elapsed().as_secs_f64() * 1e3,
@@ -565,7 +602,8 @@ fn lighting_loop<'c>(
             u: plane(2),
             rays: result.par_chunks(3).map(|p| p[1].w as u64).sum(),
         },
-        // The GPU's loop does not fill cut recombination windows yet.
+        // This frame's blur runs on the CPU (wider than the GPU's), which takes no guests
+        // from the GPU: its cut recombination windows are not filled.
         filled: None,
         timings: gpu_timings(&gpu, start, upload_ms, 0.0, &before),
     })

@@ -94,7 +94,8 @@ pub(crate) struct Frame<'a> {
 
 /// Records the estimator into `batch` after the pass that wrote `asu` (per pixel [A (w: the
 /// lights shaded), S (w: rays), U]), with `k` shadow samples per pixel (0: A alone) and the
-/// settings `filter`; [`supported`] must hold. The buffer to read back (3 vec4s per pixel,
+/// settings `filter`; [`supported`] must hold; where pixels fill their cut recombination
+/// windows, `fill` ([`crate::fill`]) gives their A. The buffer to read back (3 vec4s per pixel,
 /// for [`unpack`]): the result for k > 0, else `asu` itself, blurred in place.
 ///
 /// # Errors
@@ -106,13 +107,24 @@ pub(crate) fn record<'c>(
     asu: &Lease<'c>,
     k: u32,
     filter: &RatioFilter,
+    fill: Option<&crate::fill::Fill<'_>>,
 ) -> Result<Option<Lease<'c>>, GpuError> {
     let g = frame.g;
     let n = g.len();
     let bytes = 48 * n as u64;
     if let Some(p) = filter.interleave_blur {
         let scratch = ctx.output("A, S, U (blur)", bytes)?;
-        let jumps = ctx.output("jumps", 4 * n as u64)?;
+        let size = (frame.gbuffer, g.width, g.height);
+        // The discontinuities, once: those the fill's masks were made with, or here.
+        let mut own = None;
+        let jumps = match fill {
+            Some(f) => f.jumps(),
+            None => {
+                let jumps = own.insert(ctx.output("jumps", 4 * n as u64)?);
+                interleave::record_jumps(ctx, batch, size, &p, jumps)?;
+                &*jumps
+            }
+        };
         let mut groups = vec![Planes {
             first: 0,
             count: 1,
@@ -125,10 +137,11 @@ pub(crate) fn record<'c>(
                 params: p,
             });
         }
-        let size = (frame.gbuffer, g.width, g.height);
-        interleave::record(ctx, batch, size, asu, &scratch, &jumps, 3, &groups)?;
+        interleave::record(ctx, batch, size, asu, &scratch, jumps, 3, &groups, fill)?;
         batch.keep(scratch);
-        batch.keep(jumps);
+        if let Some(jumps) = own {
+            batch.keep(jumps);
+        }
     }
     if k == 0 {
         return Ok(None);
@@ -236,7 +249,7 @@ pub fn shadowed_indirect(
         g,
         radius: world.radius,
     };
-    let result = record(ctx, &mut batch, &frame, &asu, k, filter)?;
+    let result = record(ctx, &mut batch, &frame, &asu, k, filter, None)?;
     let read = result.as_ref().unwrap_or(&asu);
     batch.read(read.buffer(), 48 * n as u64)?;
     let (reads, _) = batch.finish()?;

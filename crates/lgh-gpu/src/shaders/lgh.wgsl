@@ -51,15 +51,6 @@ struct Params {
     hier: array<Hier, 8>,
 }
 
-// A shaded light: position and reach^2; mean normal and isotropic share; intensity (times
-// n^2) and radius r_l; blending floors, level and the x of its vertex (bits of u32s).
-struct Light {
-    position: vec4<f32>,
-    normal: vec4<f32>,
-    intensity: vec4<f32>,
-    role: vec4<f32>,
-}
-
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> nodes: array<Node>;
 @group(0) @binding(2) var<storage, read> tris: array<vec4<f32>>;
@@ -114,30 +105,6 @@ fn stratum_offset(i: u32, s: u32) -> f32 {
     let ys = (i / width) / n;
     let v = xs * 3242174889u + ys * 2447445414u + params.strata_key + s * 0x9E3779B9u;
     return f32(v >> 8u) * (1.0 / 16777216.0);
-}
-
-// B_l(d) for t = d / r_l with the role's floors (lgh_core::blending::LevelRole::floors).
-fn blend(t: f32, rise: f32, fall: f32) -> f32 {
-    return min(max(clamp(2.0 * t - 1.0, 0.0, 1.0), rise), max(clamp(2.0 - t, 0.0, 1.0), fall));
-}
-
-// The geometric factor of light `l` at x (normal n): B_l(d) cos_x cos_v / (pi (d^2 + eps^2)),
-// as lgh-render's LightBatch::eval; zero where the sphere does not reach x.
-fn light_factor(l: Light, x: vec3<f32>, n: vec3<f32>) -> f32 {
-    let d = l.position.xyz - x;
-    let d2 = dot(d, d);
-    if (!(d2 < l.position.w) || d2 <= 0.0) {
-        return 0.0;
-    }
-    let dl = sqrt(d2);
-    let inv_d = 1.0 / dl;
-    let b = blend(dl / l.intensity.w, l.role.x, l.role.y);
-    let cos_x = dot(n, d) * inv_d;
-    let cos_v = max(-dot(l.normal.xyz, d) * inv_d, 0.0) + l.normal.w;
-    if (b <= 0.0 || cos_x <= 0.0 || cos_v <= 0.0) {
-        return 0.0;
-    }
-    return b * cos_x * cos_v / (PI * (d2 + params.eps2));
 }
 
 // cos_x cos_q / (d^2 (d^2 + eps^2)) of a representative VPL (lights.rs, representative_weight).
@@ -402,7 +369,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let l = lights[j];
         let d = l.position.xyz - x;
         overdraw += select(0u, 1u, dot(d, d) < l.position.w);
-        let c = light_factor(l, x, n) * l.intensity.xyz;
+        let c = light_factor(l, x, n, params.eps2) * l.intensity.xyz;
         a += c;
         let f = luminance(c);
         if (f > 0.0 && f < 3.0e38) {
@@ -436,7 +403,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             for (var e = first + ch * size; e < end && s < k; e++) {
                 let j = lists[params.list_lights + e];
                 let l = lights[j];
-                let c = light_factor(l, x, n) * l.intensity.xyz;
+                let c = light_factor(l, x, n, params.eps2) * l.intensity.xyz;
                 let f = luminance(c);
                 if (!(f > 0.0 && f < 3.0e38)) {
                     continue;

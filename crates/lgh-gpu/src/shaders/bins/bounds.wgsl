@@ -2,10 +2,24 @@
 // pixels in the CPU's order (row by row): the depth range of the pixels that see a surface,
 // then per depth slice the box, the first normal n_s, the spread and the plane. Minima and
 // maxima do not depend on the order; the first normal is the CPU's since the order is.
+// Where pixels fill their cut recombination windows (P.fill; fill/masks.wgsl), a list's
+// tile holds its sub-image's pixels and the tile's guests that miss the sub-image
+// (lgh-render's AllBounds::with_guests), row by row as the CPU visits them.
 
 @group(0) @binding(0) var<uniform> P: BinParams;
 @group(0) @binding(1) var<storage, read> gbuffer: array<Pixel>;
 @group(0) @binding(2) var<storage, read_write> bounds: array<TileBounds>;
+// Per pixel, the sub-images it shades as a guest (read where P.fill is 1).
+@group(0) @binding(3) var<storage, read> masks: array<vec2<u32>>;
+
+// Whether pixel (x, y) counts in the bounds of a list of sub-image s: its own sub-image,
+// or one it shades as a guest.
+fn listed(x: u32, y: u32, s: u32) -> bool {
+    if (P.fill == 0u || (y % P.n) * P.n + x % P.n == s) {
+        return true;
+    }
+    return has_bit(masks[y * P.width + x], s);
+}
 
 // a / b correctly rounded, as the CPU divides (WGSL's division may be 2.5 ulp off, and the
 // quotient picks a slice).
@@ -22,17 +36,20 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) n
         let t = list_tile(l);
         let sx = t.z % P.n;
         let sy = t.z / P.n;
-        let x0 = t.x * P.tile + sx;
+        // With guests every pixel of the tile, else its sub-image's alone.
+        let guests = P.fill != 0u;
+        let step = select(P.n, 1u, guests);
+        let x0 = t.x * P.tile + select(sx, 0u, guests);
         let x1 = min((t.x + 1u) * P.tile, P.width);
-        let y0 = t.y * P.tile + sy;
+        let y0 = t.y * P.tile + select(sy, 0u, guests);
         let y1 = min((t.y + 1u) * P.tile, P.height);
         var zmin = 0.0;
         var zmax = 0.0;
         var seen = false;
-        for (var y = y0; y < y1; y += P.n) {
-            for (var x = x0; x < x1; x += P.n) {
+        for (var y = y0; y < y1; y += step) {
+            for (var x = x0; x < x1; x += step) {
                 let p = gbuffer[y * P.width + x];
-                if (p.position.w > 0.5) {
+                if (p.position.w > 0.5 && listed(x, y, t.z)) {
                     let z = p.albedo.w;
                     if (seen) {
                         zmin = min(zmin, z);
@@ -48,10 +65,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) n
         var b: TileBounds;
         b.z = vec4<f32>(zmin, zmax, select(0.0, 1.0, seen), 0.0);
         let span = zmax - zmin;
-        for (var y = y0; y < y1 && seen; y += P.n) {
-            for (var x = x0; x < x1; x += P.n) {
+        for (var y = y0; y < y1 && seen; y += step) {
+            for (var x = x0; x < x1; x += step) {
                 let p = gbuffer[y * P.width + x];
-                if (p.position.w <= 0.5) {
+                if (p.position.w <= 0.5 || !listed(x, y, t.z)) {
                     continue;
                 }
                 var k = 0u;

@@ -22,7 +22,8 @@ struct BinParams {
     // Where the pixels sorted by list start, and where each pixel's list starts.
     order_base: u32,
     list_base: u32,
-    _p: u32,
+    // 1 where pixels fill their cut recombination windows: the bounds count the guests.
+    fill: u32,
 }
 
 // Depth slices of a tile (lgh-render's DEPTH_SLICES).

@@ -60,7 +60,7 @@ pub struct LghFrame {
     /// The tile edge in sub-image pixels.
     tile: u32,
     /// Per pixel, the sub-images its recombination window misses and it shades itself
-    /// (CPU loop only; `lgh.fill_below`).
+    /// (the CPU's loop; a backend that shades makes its own; `lgh.fill_below`).
     missed: Option<Vec<u64>>,
     pub(super) packed: Vec<PackedLight>,
     pub(super) stats: LghStats,
@@ -362,7 +362,8 @@ impl LghFrame {
             lights.show_only_level(level);
         }
         let tile = all.tiling.tile.unwrap_or_else(|| auto_tile(n)).max(1);
-        // The CPU's loop fills cut recombination windows (a backend's does not yet).
+        // The CPU's loop fills cut recombination windows with these masks (a backend that
+        // shades makes its own: lgh-gpu's `fill`).
         let missed = if tables {
             None
         } else {

@@ -83,7 +83,7 @@ pub struct LghSettings {
     /// this fraction of the n^2 sub-images (thin or folded geometry: the window stops at
     /// its edges) shades the lights of the sub-images it misses itself, so that each light
     /// counts once there too (an extension; docs/design.md, "Filling cut windows"). 0:
-    /// never. The CPU's lighting loop only (`--device gpu` does not fill yet).
+    /// never. Both backends' loops (`--device gpu` with its blur on the GPU).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = LghSettings::default().fill_below, value_name = "FRACTION"))]
     pub fill_below: f32,
 }
