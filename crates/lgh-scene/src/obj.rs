@@ -35,7 +35,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let mtl_problem = RefCell::new(None);
     let (models, materials) = contain_panics(path, "OBJ/MTL", || {
         tobj::load_obj_buf(&mut BufReader::new(file), &opts, |name| {
-            load_mtl(&dir.join(name), &mtl_problem)
+            load_mtl(&beside(dir, name), &mtl_problem)
         })
         .map_err(|e| SceneError::new(path, format!("cannot parse OBJ: {e}")))
     })?;
@@ -69,7 +69,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             ));
         }
         let albedo_texture = match m.diffuse_texture.as_deref() {
-            Some(name) => load_texture(&mut scene, &mut budget, &mut loaded, &dir.join(name))?,
+            Some(name) => load_texture(&mut scene, &mut budget, &mut loaded, &beside(dir, name))?,
             None => None,
         };
         scene.materials.push(Material {
@@ -156,6 +156,19 @@ fn load_mtl(path: &Path, problem: &RefCell<Option<MtlProblem>>) -> tobj::MTLLoad
     tobj::load_mtl_buf(&mut text.as_bytes())
 }
 
+/// The file `name` that an OBJ or MTL file in `dir` refers to. Files written on Windows
+/// separate folders with backslashes (`.\textures\wood.jpg`): where no file has the name
+/// as written and the platform's separator is not a backslash, they are read as separators.
+fn beside(dir: &Path, name: impl AsRef<Path>) -> PathBuf {
+    let path = dir.join(&name);
+    match name.as_ref().to_str() {
+        Some(n) if std::path::MAIN_SEPARATOR != '\\' && n.contains('\\') && !path.exists() => {
+            dir.join(n.replace('\\', "/"))
+        }
+        _ => path,
+    }
+}
+
 /// Loads an image file as an sRGB texture within `budget`, once per path however many
 /// materials name it; an image that cannot be read is a warning (the material colour is
 /// used), one over the budget an error.
@@ -226,6 +239,33 @@ mod tests {
                 .iter()
                 .take(8)
                 .all(|m| m.albedo_texture == Some(0))
+        );
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    /// A texture and a material library named with Windows separators (`.\\t\\t.png`, as the
+    /// assimp spider's MTL does) are found; a texture that is missing either way is a
+    /// warning.
+    #[test]
+    fn windows_separators_in_mtl_paths_are_read() {
+        let d = dir("backslash");
+        std::fs::create_dir_all(d.join("t")).unwrap();
+        image::RgbImage::new(4, 4)
+            .save(d.join("t").join("t.png"))
+            .unwrap();
+        let mtl = "newmtl a\nKd 1 1 1\nmap_Kd .\\t\\t.png\nnewmtl b\nmap_Kd .\\t\\none.png\n";
+        std::fs::write(d.join("t").join("m.mtl"), mtl).unwrap();
+        let obj =
+            format!("mtllib t\\m.mtl\n{QUAD}usemtl a\nf 1/1 3/3 2/2\nusemtl b\nf 1/1 4/4 3/3\n");
+        std::fs::write(d.join("s.obj"), obj).unwrap();
+        let scene = load(&d.join("s.obj")).unwrap();
+        assert_eq!(scene.textures.len(), 1, "{:?}", scene.report.warnings);
+        assert_eq!(scene.materials[0].albedo_texture, Some(0));
+        assert_eq!(scene.materials[1].albedo_texture, None);
+        assert!(
+            scene.report.warnings.iter().any(|w| w.contains("none.png")),
+            "{:?}",
+            scene.report.warnings
         );
         let _ = std::fs::remove_dir_all(&d);
     }

@@ -12,13 +12,28 @@
 // Per pixel, the sub-images it shades as a guest (read where P.fill is 1).
 @group(0) @binding(3) var<storage, read> masks: array<vec2<u32>>;
 
-// Whether pixel (x, y) counts in the bounds of a list of sub-image s: its own sub-image,
-// or one it shades as a guest.
-fn listed(x: u32, y: u32, s: u32) -> bool {
-    if (P.fill == 0u || (y % P.n) * P.n + x % P.n == s) {
+// Whether pixel (x, y) counts in the bounds of a list of sub-image s, where the list's tile
+// has `guests`: its own sub-image, or one it shades as a guest.
+fn listed(x: u32, y: u32, s: u32, guests: bool) -> bool {
+    if (!guests || (y % P.n) * P.n + x % P.n == s) {
         return true;
     }
     return has_bit(masks[y * P.width + x], s);
+}
+
+// Whether a pixel of tile t (tx, ty, sub-image s) shades sub-image s as a guest: the
+// masks alone are read, an eighth of the pixels' bytes.
+fn has_guests(t: vec3<u32>) -> bool {
+    if (P.fill == 0u) {
+        return false;
+    }
+    var all_masks = vec2<u32>(0u);
+    for (var y = t.y * P.tile; y < min((t.y + 1u) * P.tile, P.height); y++) {
+        for (var x = t.x * P.tile; x < min((t.x + 1u) * P.tile, P.width); x++) {
+            all_masks |= masks[y * P.width + x];
+        }
+    }
+    return has_bit(all_masks, t.z);
 }
 
 // a / b correctly rounded, as the CPU divides (WGSL's division may be 2.5 ulp off, and the
@@ -37,7 +52,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) n
         let sx = t.z % P.n;
         let sy = t.z / P.n;
         // With guests every pixel of the tile, else its sub-image's alone.
-        let guests = P.fill != 0u;
+        let guests = has_guests(t);
         let step = select(P.n, 1u, guests);
         let x0 = t.x * P.tile + select(sx, 0u, guests);
         let x1 = min((t.x + 1u) * P.tile, P.width);
@@ -49,7 +64,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) n
         for (var y = y0; y < y1; y += step) {
             for (var x = x0; x < x1; x += step) {
                 let p = gbuffer[y * P.width + x];
-                if (p.position.w > 0.5 && listed(x, y, t.z)) {
+                if (p.position.w > 0.5 && listed(x, y, t.z, guests)) {
                     let z = p.albedo.w;
                     if (seen) {
                         zmin = min(zmin, z);
@@ -68,7 +83,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) n
         for (var y = y0; y < y1 && seen; y += step) {
             for (var x = x0; x < x1; x += step) {
                 let p = gbuffer[y * P.width + x];
-                if (p.position.w <= 0.5 || !listed(x, y, t.z)) {
+                if (p.position.w <= 0.5 || !listed(x, y, t.z, guests)) {
                     continue;
                 }
                 var k = 0u;
