@@ -464,10 +464,11 @@ pub(super) fn record_loop<'c>(
     let packed = Tables::new(tables, lights.is_none())?;
     let (mut batch, lists, layout, tiles) = match (bins, &tables.bins) {
         (Some(b), _) => {
-            // The first submission on the wall clock; the shaded lights' table's share of
-            // it from the GPU's timestamps, where it has them.
+            // The first submission on the wall clock; the shares of the shaded lights' table
+            // and the fill's masks from the GPU's timestamps, where it has them.
             before.push(("tile_counts", b.counts_ms));
-            before.extend(b.first.iter().filter(|(name, _)| *name == "light_table"));
+            let shares = ["light_table", "fill_masks"];
+            before.extend(b.first.iter().filter(|(name, _)| shares.contains(name)));
             (b.batch, b.lists, b.layout, Some(b.tiles))
         }
         (None, Some(flat)) => (
