@@ -34,6 +34,7 @@ pub mod mesh;
 pub mod obj;
 pub mod scene;
 pub mod scene_file;
+mod text;
 pub mod texture;
 pub mod texture_file;
 

@@ -2,7 +2,10 @@
 //!
 //! Faces are triangulated; `Kd` is the albedo, `map_Kd` its texture (sRGB, relative to the
 //! MTL file), `Ke` the emitted radiance. A missing MTL file or texture is a warning, not an
-//! error: the geometry still renders with default materials.
+//! error: the geometry still renders with default materials. What old exporters wrote and
+//! the parser does not read is mended, with a warning: files in ISO-8859-1 or UTF-16
+//! (decoded first), Windows path separators, colours of one number, materials and
+//! `usemtl` without a name.
 
 use std::cell::RefCell;
 use std::collections::HashMap;
@@ -13,6 +16,7 @@ use glam::{Mat4, Vec2, Vec3};
 
 use crate::error::contain_panics;
 use crate::mesh::Primitive;
+use crate::text;
 use crate::texture_file::{TexelBudget, TextureError};
 use crate::{Material, Scene, SceneError};
 
@@ -33,13 +37,32 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let file = std::fs::File::open(path)
         .map_err(|e| SceneError::new(path, format!("cannot read OBJ: {e}")))?;
     let mtl_problem = RefCell::new(None);
-    let (models, materials) = contain_panics(path, "OBJ/MTL", || {
-        tobj::load_obj_buf(&mut BufReader::new(file), &opts, |name| {
-            load_mtl(&beside(dir, name), &mtl_problem)
+    let warnings = RefCell::new(Vec::new());
+    let parse = |mut reader: &mut dyn std::io::BufRead| {
+        contain_panics(path, "OBJ/MTL", || {
+            tobj::load_obj_buf(&mut reader, &opts, |name| {
+                load_mtl(&beside(dir, name), &mtl_problem, &warnings)
+            })
+            .map_err(|e| SceneError::new(path, format!("cannot parse OBJ: {e}")))
         })
-        .map_err(|e| SceneError::new(path, format!("cannot parse OBJ: {e}")))
-    })?;
+    };
+    // UTF-8 streams through the parser; a file it cannot read is read again, mended where
+    // it can be (decoded from another encoding, `usemtl` without a name), and parsed again.
+    let parsed = match parse(&mut BufReader::new(file)) {
+        Err(first) => match mended(path)? {
+            Some((text, notes)) => {
+                // What the first pass found of its material libraries, found again.
+                *mtl_problem.borrow_mut() = None;
+                *warnings.borrow_mut() = notes;
+                parse(&mut text.as_bytes())
+            }
+            None => Err(first),
+        },
+        parsed => parsed,
+    };
+    let (models, materials) = parsed?;
     let mut scene = Scene::new(file_stem(path));
+    scene.report.warnings.append(&mut warnings.into_inner());
     let obj_materials = match (materials, mtl_problem.into_inner()) {
         (Ok(m), _) => m,
         (Err(_), Some(MtlProblem(why))) => return Err(SceneError::new(path, why)),
@@ -121,39 +144,112 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     Ok(scene)
 }
 
+/// The most bytes of an OBJ file that is read again to be mended ([`mended`]).
+const MAX_MENDED_BYTES: u64 = 1 << 30;
+
+/// The OBJ file at `path` as text the parser reads, with a warning for each change, where
+/// it needs one: decoded from UTF-16 or ISO-8859-1 (the parser reads UTF-8), and each
+/// `usemtl` without a name (Blender writes one for a slot without a material; the parser
+/// refuses it) naming no material, so that its faces take the default. `None` where
+/// nothing needs mending (or the file is over [`MAX_MENDED_BYTES`]).
+fn mended(path: &Path) -> Result<Option<(String, Vec<String>)>, SceneError> {
+    let size = std::fs::metadata(path).map_or(u64::MAX, |m| m.len());
+    if size > MAX_MENDED_BYTES {
+        return Ok(None);
+    }
+    let bytes = crate::file_kind::read_capped(path, MAX_MENDED_BYTES, "OBJ file")?;
+    let (text, encoding) = text::decode(bytes).map_err(|e| SceneError::new(path, e))?;
+    let mut notes: Vec<String> = encoding.warning("the OBJ file").into_iter().collect();
+    let bare = |line: &str| {
+        let mut words = line.split_whitespace();
+        words.next() == Some("usemtl") && words.next().is_none()
+    };
+    if !text.lines().any(bare) {
+        return Ok((!notes.is_empty()).then_some((text, notes)));
+    }
+    let mut out = String::with_capacity(text.len());
+    for (i, line) in text.lines().enumerate() {
+        if bare(line) {
+            notes.push(format!(
+                "{} line {}: `usemtl` without a name: its faces take the default material",
+                path.display(),
+                i + 1
+            ));
+            out.push_str("usemtl (no name)\n");
+        } else {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    Ok(Some((out, notes)))
+}
+
 /// A material library that exists but cannot be used: an error, where a missing library is
 /// a warning (its emitters, the scene's lights, would otherwise vanish behind "no lights").
 struct MtlProblem(String);
 
-/// Reads an MTL file for `tobj`, first checking what its parser would panic on (a colour
-/// with fewer than three numbers); the problem, named by file and line, goes to `problem`.
-fn load_mtl(path: &Path, problem: &RefCell<Option<MtlProblem>>) -> tobj::MTLLoadResult {
+/// Reads an MTL file for `tobj` (decoded from UTF-16 or ISO-8859-1 where it is not UTF-8,
+/// with a warning into `warnings`), first mending what its parser does not read (a colour
+/// of one number, the format's grey; a material without a name) and checking what it
+/// would panic on (a colour of two numbers or none); the problem, named by file and line,
+/// goes to `problem`.
+fn load_mtl(
+    path: &Path,
+    problem: &RefCell<Option<MtlProblem>>,
+    warnings: &RefCell<Vec<String>>,
+) -> tobj::MTLLoadResult {
     if !path.exists() {
         return Err(tobj::LoadError::OpenFileFailed); // a warning: the geometry still renders
     }
     let text = crate::file_kind::read_capped(path, crate::file_kind::MAX_TEXT_BYTES, "MTL file")
-        .and_then(|b| String::from_utf8(b).map_err(|_| SceneError::new(path, "not UTF-8 text")));
+        .and_then(|b| text::decode(b).map_err(|e| SceneError::new(path, e)));
     let text = match text {
-        Ok(t) => t,
+        Ok((t, encoding)) => {
+            let what = format!("material library {}", path.display());
+            warnings.borrow_mut().extend(encoding.warning(&what));
+            t
+        }
         Err(e) => {
             *problem.borrow_mut() = Some(MtlProblem(e.to_string()));
             return Err(tobj::LoadError::OpenFileFailed);
         }
     };
+    // A material without a name (Blender writes `newmtl` alone for a slot without one)
+    // gets one that no `usemtl` names: its faces take the default material, as `usemtl`
+    // alone gives them.
+    let mut named = String::with_capacity(text.len());
     for (i, line) in text.lines().enumerate() {
-        let mut words = line.split_whitespace();
-        if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke")) = words.next()
-            && words.count() < 3
-        {
-            *problem.borrow_mut() = Some(MtlProblem(format!(
-                "{} line {}: {key} needs three numbers",
-                path.display(),
-                i + 1
-            )));
-            return Err(tobj::LoadError::MaterialParseError);
+        let words: Vec<&str> = line.split_whitespace().collect();
+        match words.as_slice() {
+            // A colour of one number is grey (the MTL format's rule), which the parser
+            // does not know.
+            [key @ ("Ka" | "Kd" | "Ks" | "Ke"), v] => {
+                named.push_str(&format!("{key} {v} {v} {v}\n"));
+                continue;
+            }
+            [key @ ("Ka" | "Kd" | "Ks" | "Ke")] | [key @ ("Ka" | "Kd" | "Ks" | "Ke"), _, _] => {
+                *problem.borrow_mut() = Some(MtlProblem(format!(
+                    "{} line {}: {key} needs one or three numbers",
+                    path.display(),
+                    i + 1
+                )));
+                return Err(tobj::LoadError::MaterialParseError);
+            }
+            ["newmtl"] => {
+                warnings.borrow_mut().push(format!(
+                    "material library {} line {}: a material without a name, which no face can use",
+                    path.display(),
+                    i + 1
+                ));
+                named.push_str(&format!("newmtl (no name, line {})\n", i + 1));
+                continue;
+            }
+            _ => {}
         }
+        named.push_str(line);
+        named.push('\n');
     }
-    tobj::load_mtl_buf(&mut text.as_bytes())
+    tobj::load_mtl_buf(&mut named.as_bytes())
 }
 
 /// The file `name` that an OBJ or MTL file in `dir` refers to. Files written on Windows
@@ -267,6 +363,53 @@ mod tests {
             "{:?}",
             scene.report.warnings
         );
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    /// OBJ and MTL files in ISO-8859-1 and UTF-16 (as old exporters and some tools write
+    /// them) load with a warning, their names decoded, so that `usemtl` finds its material;
+    /// a material without a name is a warning and its faces take the default; a colour of
+    /// one number (the format's grey) is read.
+    #[test]
+    fn latin1_utf16_and_unnamed_materials_load() {
+        let d = dir("encodings");
+        // "Terraindæk" in ISO-8859-1 in both files, as the assimp model regr01 has it.
+        let mtl = b"newmtl Terraind\xe6k\nKd 0.1 0.2 0.3\nKs 0\nnewmtl\nKd 1 1 1\n".to_vec();
+        std::fs::write(d.join("l.mtl"), mtl).unwrap();
+        let obj = [
+            b"mtllib l.mtl\n".as_slice(),
+            QUAD.as_bytes(),
+            b"usemtl\nf 1/1 4/4 3/3\nusemtl Terraind\xe6k\nf 1/1 3/3 2/2\n",
+        ]
+        .concat();
+        std::fs::write(d.join("l.obj"), &obj).unwrap();
+        let scene = load(&d.join("l.obj")).unwrap();
+        let w = &scene.report.warnings;
+        assert!(
+            w.iter().any(|w| w.contains("OBJ file is not UTF-8")),
+            "{w:?}"
+        );
+        assert!(
+            w.iter().any(|w| w.contains("a material without a name")),
+            "{w:?}"
+        );
+        assert!(
+            w.iter().any(|w| w.contains("`usemtl` without a name")),
+            "{w:?}"
+        );
+        let albedo = |t: usize| scene.materials[scene.mesh.materials[t] as usize].albedo;
+        assert_eq!(albedo(0), Vec3::splat(0.8));
+        assert_eq!(albedo(1), Vec3::new(0.1, 0.2, 0.3));
+        // The same OBJ in UTF-16, big-endian, with its byte-order mark.
+        let text: String = obj.iter().map(|&b| char::from(b)).collect();
+        let utf16: Vec<u8> = [0xFE, 0xFF]
+            .into_iter()
+            .chain(text.encode_utf16().flat_map(u16::to_be_bytes))
+            .collect();
+        std::fs::write(d.join("u.obj"), utf16).unwrap();
+        let scene = load(&d.join("u.obj")).unwrap();
+        assert_eq!(scene.mesh.len(), 2);
+        assert!(scene.report.warnings.iter().any(|w| w.contains("UTF-16")));
         let _ = std::fs::remove_dir_all(&d);
     }
 

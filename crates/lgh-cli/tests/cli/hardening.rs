@@ -113,7 +113,7 @@ fn obj_and_mtl_problems_are_named() {
     let p = w("short.obj", obj);
     let run =
         |p: &std::path::Path| lgh(&["render", s(p), "--out", o, "--size", "16x9", "--vpls", "50"]);
-    assert_error(&run(&p), &["m.mtl line 2: Kd needs three numbers"]);
+    assert_error(&run(&p), &["m.mtl line 2: Kd needs one or three numbers"]);
     // A line tobj cannot parse is an error too; a missing library is a warning.
     w("m.mtl", "newmtl mirror\nKd a b c\n");
     assert_error(&run(&p), &["short.obj", "material library does not parse"]);
