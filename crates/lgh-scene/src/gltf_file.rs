@@ -12,6 +12,7 @@ use std::path::Path;
 use glam::{Mat4, Vec2, Vec3};
 
 use crate::error::contain_panics;
+use crate::gltf_uv::UvMap;
 use crate::mesh::Primitive;
 use crate::obj::file_stem;
 use crate::{Camera, Light, Material, Scene, SceneError};
@@ -51,9 +52,15 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
             scene.textures.len() as u32 - 1
         }));
     }
+    // Per material, the texture coordinates its base colour reads.
+    let mut uv_maps = Vec::with_capacity(doc.materials().len());
     for m in doc.materials() {
         let pbr = m.pbr_metallic_roughness();
         let [r, g, b, _] = pbr.base_color_factor();
+        uv_maps.push(
+            pbr.base_color_texture()
+                .map_or(UvMap::IDENTITY, |i| UvMap::of(&i)),
+        );
         let albedo_texture = pbr
             .base_color_texture()
             .and_then(|info| {
@@ -123,11 +130,19 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
                     .read_normals()
                     .map(|it| it.map(Vec3::from_array).collect())
                     .unwrap_or_default();
-                let uvs = reader
-                    .read_tex_coords(0)
-                    .map(|it| it.into_f32().map(|[u, v]| Vec2::new(u, 1.0 - v)).collect())
-                    .unwrap_or_default();
                 let material = p.material().index().map_or(default_material, |i| i as u32);
+                let map = uv_maps.get(material as usize).unwrap_or(&UvMap::IDENTITY);
+                let uvs = reader
+                    .read_tex_coords(map.set)
+                    .map(|it| {
+                        it.into_f32()
+                            .map(|uv| {
+                                let [u, v] = map.apply(uv);
+                                Vec2::new(u, 1.0 - v)
+                            })
+                            .collect()
+                    })
+                    .unwrap_or_default();
                 let prim = Primitive {
                     positions,
                     normals,

@@ -28,6 +28,7 @@ pub mod error;
 pub mod file_kind;
 pub mod gltf_file;
 pub mod gltf_import;
+mod gltf_uv;
 pub mod light;
 pub mod material;
 pub mod mesh;
