@@ -16,10 +16,10 @@
 //!    the interleaving blur) and per pixel the mask of the sub-images its window misses
 //!    (`masks.wgsl`), which the binning reads to put the guests in the tiles' bounds
 //!    ([`crate::bins::record`]).
-//! 2. [`Fill::record_guests`], after the lighting loop: each guest sums its missed
+//! 2. `Fill::record_guests`, after the lighting loop: each guest sums its missed
 //!    sub-images' lists at itself (`guests.wgsl`), and the loop's raw A is kept.
-//! 3. [`Fill::record_recombine`], after the blur that recombines A
-//!    ([`crate::interleave::record`]): A of the pixels that fill (`recombine.wgsl`).
+//! 3. `Fill::record_recombine`, after the blur that recombines A
+//!    (`interleave::record`): A of the pixels that fill (`recombine.wgsl`).
 //!
 //! Every pixel sums its own terms in a fixed order: the result does not depend on
 //! scheduling.
@@ -135,8 +135,10 @@ impl<'c> Fill<'c> {
             planes: 0,
             _p0: 0,
         };
-        let [source, _, _] = sources();
-        let pipeline = ctx.pipeline("fill masks", || source);
+        let pipeline = ctx.pipeline("fill masks", || {
+            let [source, _, _] = sources();
+            source
+        });
         let uniform = batch.uniform(&window)?;
         let bind = ctx.bind_group(
             &pipeline,
@@ -195,8 +197,10 @@ impl<'c> Fill<'c> {
             list_lights: lists.list_lights,
             eps2,
         })?;
-        let [_, source, _] = sources();
-        let pipeline = ctx.pipeline("fill guests", || source);
+        let pipeline = ctx.pipeline("fill guests", || {
+            let [_, source, _] = sources();
+            source
+        });
         let bind = ctx.bind_group(
             &pipeline,
             vec![
@@ -233,8 +237,10 @@ impl<'c> Fill<'c> {
         };
         let w = &self.window;
         let uniform = batch.uniform(&FillParams { planes, ..*w })?;
-        let [_, _, source] = sources();
-        let pipeline = ctx.pipeline("fill recombine", || source);
+        let pipeline = ctx.pipeline("fill recombine", || {
+            let [_, _, source] = sources();
+            source
+        });
         let bind = ctx.bind_group(
             &pipeline,
             vec![
