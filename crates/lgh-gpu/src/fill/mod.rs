@@ -79,6 +79,43 @@ pub fn sources() -> [String; 3] {
     ]
 }
 
+/// The kernels, by their place in [`sources`].
+#[derive(Clone, Copy)]
+enum Kernel {
+    Masks = 0,
+    Guests = 1,
+    Recombine = 2,
+}
+
+impl Kernel {
+    /// The pipeline's name, and the pass's timing name.
+    fn names(self) -> (&'static str, &'static str) {
+        match self {
+            Self::Masks => ("fill masks", "fill_masks"),
+            Self::Guests => ("fill guests", "fill_guests"),
+            // The recombination counts as the blur's.
+            Self::Recombine => ("fill recombine", "interleave_blur"),
+        }
+    }
+}
+
+/// Records `kernel` over `pixels` invocations with `bindings` (its uniform first).
+fn record_kernel(
+    ctx: &GpuContext,
+    batch: &mut Batch<'_>,
+    kernel: Kernel,
+    bindings: Vec<wgpu::BindingResource<'_>>,
+    pixels: usize,
+) -> Result<(), GpuError> {
+    let (name, timing) = kernel.names();
+    let pipeline = ctx.pipeline(name, || {
+        let mut all = sources();
+        std::mem::take(&mut all[kernel as usize])
+    });
+    let bind = ctx.bind_group(&pipeline, bindings);
+    batch.dispatch(timing, &pipeline, &bind, pixels)
+}
+
 /// Where a frame's loop reads its lights: the lights' table and the binned lists, where the
 /// lists' lights start in it, and the tiles (edge in full-resolution pixels, tiles along x
 /// and y; [`crate::bins::GpuBins::tiles`]).
@@ -135,21 +172,14 @@ impl<'c> Fill<'c> {
             planes: 0,
             _p0: 0,
         };
-        let pipeline = ctx.pipeline("fill masks", || {
-            let [source, _, _] = sources();
-            source
-        });
         let uniform = batch.uniform(&window)?;
-        let bind = ctx.bind_group(
-            &pipeline,
-            vec![
-                uniform.as_entire_binding(),
-                gbuffer.binding(),
-                jumps.binding(),
-                masks.binding(),
-            ],
-        );
-        batch.dispatch("fill_masks", &pipeline, &bind, pixels as usize)?;
+        let bindings = vec![
+            uniform.as_entire_binding(),
+            gbuffer.binding(),
+            jumps.binding(),
+            masks.binding(),
+        ];
+        record_kernel(ctx, batch, Kernel::Masks, bindings, pixels as usize)?;
         Ok(Some(Self {
             jumps,
             masks,
@@ -197,23 +227,16 @@ impl<'c> Fill<'c> {
             list_lights: lists.list_lights,
             eps2,
         })?;
-        let pipeline = ctx.pipeline("fill guests", || {
-            let [_, source, _] = sources();
-            source
-        });
-        let bind = ctx.bind_group(
-            &pipeline,
-            vec![
-                uniform.as_entire_binding(),
-                gbuffer.binding(),
-                lists.lights.binding(),
-                lists.lists.binding(),
-                self.masks.binding(),
-                asu.binding(),
-                shaded.binding(),
-            ],
-        );
-        batch.dispatch("fill_guests", &pipeline, &bind, pixels as usize)?;
+        let bindings = vec![
+            uniform.as_entire_binding(),
+            gbuffer.binding(),
+            lists.lights.binding(),
+            lists.lists.binding(),
+            self.masks.binding(),
+            asu.binding(),
+            shaded.binding(),
+        ];
+        record_kernel(ctx, batch, Kernel::Guests, bindings, pixels as usize)?;
         self.shaded = Some(shaded);
         Ok(())
     }
@@ -237,23 +260,16 @@ impl<'c> Fill<'c> {
         };
         let w = &self.window;
         let uniform = batch.uniform(&FillParams { planes, ..*w })?;
-        let pipeline = ctx.pipeline("fill recombine", || {
-            let [_, _, source] = sources();
-            source
-        });
-        let bind = ctx.bind_group(
-            &pipeline,
-            vec![
-                uniform.as_entire_binding(),
-                gbuffer.binding(),
-                self.jumps.binding(),
-                self.masks.binding(),
-                shaded.binding(),
-                images.binding(),
-            ],
-        );
+        let bindings = vec![
+            uniform.as_entire_binding(),
+            gbuffer.binding(),
+            self.jumps.binding(),
+            self.masks.binding(),
+            shaded.binding(),
+            images.binding(),
+        ];
         let pixels = (w.width * w.height) as usize;
-        batch.dispatch("interleave_blur", &pipeline, &bind, pixels)
+        record_kernel(ctx, batch, Kernel::Recombine, bindings, pixels)
     }
 
     /// Hands the buffers to `batch`, which keeps them until its submission is done.
