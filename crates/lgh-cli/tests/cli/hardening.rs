@@ -257,7 +257,10 @@ fn stats_report_peak_memory_within_the_estimate() {
 
 /// Every glTF, GLB and OBJ file of Debian's assimp-testmodels (sample models and broken
 /// ones made by others) renders or is refused with exit code 2 and a one-line message; none
-/// panics. `.ci/run` installs the package; without it the test shows as ignored.
+/// panics. Old OBJ files that others' loaders read render too: in ISO-8859-1 (regr01,
+/// box_mat_with_spaces's library) or UTF-16 (box_UTF16BE), with a material and `usemtl`
+/// without a name and a colour of one number (empty_mat). `.ci/run` installs the
+/// package; without it the test shows as ignored.
 #[test]
 #[cfg_attr(not(assimp_models), ignore = "needs Debian's assimp-testmodels")]
 fn every_assimp_test_model_renders_or_is_refused_cleanly() {
@@ -283,6 +286,12 @@ fn every_assimp_test_model_renders_or_is_refused_cleanly() {
     let d = temp_dir("assimp");
     let out = d.join("o.png");
     let (mut rendered, mut refused) = (0, 0);
+    let must_render = [
+        "regr01.obj",
+        "box_UTF16BE.obj",
+        "box_mat_with_spaces.obj",
+        "empty_mat.obj",
+    ];
     for f in &files {
         let r = lgh(&[
             "render",
@@ -296,6 +305,12 @@ fn every_assimp_test_model_renders_or_is_refused_cleanly() {
         ]);
         let err = String::from_utf8_lossy(&r.stderr);
         assert!(!err.contains("panicked"), "{}: {err}", f.display());
+        let name = f.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        assert!(
+            !must_render.contains(&name) || r.status.success(),
+            "{}: {err}",
+            f.display()
+        );
         match r.status.code() {
             Some(0) => rendered += 1,
             Some(2) => {
@@ -308,8 +323,9 @@ fn every_assimp_test_model_renders_or_is_refused_cleanly() {
         }
     }
     eprintln!("{rendered} rendered, {refused} refused of {}", files.len());
-    // The valid sample models render (Box, Cameras, ClearCoat, the engine, ...).
-    assert!(rendered >= 30, "{rendered} rendered");
+    // The valid sample models render (Box, Cameras, ClearCoat, the engine, ...): 40 of 78
+    // in Debian 12's package.
+    assert!(rendered >= 38, "{rendered} rendered");
     let _ = std::fs::remove_dir_all(&d);
 }
 
