@@ -181,7 +181,7 @@ f 9 10 11
 pub const MTL: &str = "\
 newmtl white
 Kd 0.8 0.8 0.8
-map_Kd texture.png
+map_Kd -s 2 2 -clamp on texture.png
 illum 2
 newmtl light
 Kd 0.5 0.5 0.5

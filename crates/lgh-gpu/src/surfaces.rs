@@ -23,7 +23,7 @@ pub struct TriShade {
 }
 
 /// `Material` in `shaders/surface.wgsl`: albedo factor (w: the texture's index as bits,
-/// [`NO_TEXTURE`] for none) and emission.
+/// [`NO_TEXTURE`] for none) and emission (w: the texture's wrap in u | in v << 2, as bits).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuMaterial {
@@ -124,7 +124,9 @@ fn materials(scene: &lgh_scene::Scene) -> Vec<GpuMaterial> {
                 .unwrap_or(NO_TEXTURE);
             GpuMaterial {
                 albedo: m.albedo.extend(f32::from_bits(k)),
-                emission: m.emission.extend(0.0),
+                emission: m.emission.extend(f32::from_bits(
+                    m.albedo_wrap[0].code() | m.albedo_wrap[1].code() << 2,
+                )),
             }
         })
         .collect()

@@ -5,14 +5,15 @@
 use glam::{Vec2, Vec3};
 use lgh_render::World;
 use lgh_render::passes::gbuffer::GBuffer;
-use lgh_scene::texture::Texture;
+use lgh_scene::texture::{Texture, Wrap};
 
 mod common;
 use common::{SCENES, world};
 
-/// The default scene with a 5 x 3 texture of distinct colours on every material, and
-/// texture coordinates from the positions that wrap several times across each wall (both
-/// signs, so that the wrap of negative coordinates is exercised).
+/// The default scene with a 5 x 3 texture of distinct colours on every material, with
+/// repeat, clamp and mirror wraps in u and v, and texture coordinates from the positions
+/// that wrap several times across each wall (both signs, so that the wrap of negative
+/// coordinates is exercised).
 fn textured_box() -> World {
     let mut w = world(None);
     let scene = &mut w.scene;
@@ -20,9 +21,12 @@ fn textured_box() -> World {
         .flat_map(|i| [(i * 17) as u8, (255 - i * 13) as u8, (i * i % 251) as u8])
         .collect();
     scene.textures = vec![Texture::from_srgb8(5, 3, 3, &bytes).expect("texture")];
-    for m in &mut scene.materials {
+    // Each wrap in both axes on the first three materials, clamp in v only on the fourth.
+    let wraps = [Wrap::Repeat, Wrap::Clamp, Wrap::Mirror];
+    for (i, m) in scene.materials.iter_mut().enumerate() {
         m.albedo_texture = Some(0);
         m.albedo = Vec3::new(0.9, 0.8, 1.0);
+        m.albedo_wrap = [wraps[i % 3], wraps[(i / 3 + i) % 3]];
     }
     let (lo, hi) = scene.mesh.bounds();
     let size = (hi - lo).max_element();

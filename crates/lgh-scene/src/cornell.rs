@@ -201,8 +201,8 @@ pub fn cornell_box() -> Scene {
         Material {
             name: "light".into(),
             albedo: Vec3::splat(0.78),
-            albedo_texture: None,
             emission: LIGHT_RADIANCE,
+            ..Material::default()
         },
     ];
     let room_centre = Vec3::new(278.0, 274.4, 279.6) * 1e-3;

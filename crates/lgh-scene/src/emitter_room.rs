@@ -105,8 +105,8 @@ pub fn emitter_room(n: u32) -> Scene {
         scene.materials.push(Material {
             name: format!("emitter{k}"),
             albedo: Vec3::splat(0.5),
-            albedo_texture: None,
             emission: tint * power,
+            ..Material::default()
         });
     }
     let inside = ROOM * 0.5;

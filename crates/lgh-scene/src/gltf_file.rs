@@ -12,9 +12,10 @@ use std::path::Path;
 use glam::{Mat4, Vec2, Vec3};
 
 use crate::error::contain_panics;
-use crate::gltf_uv::UvMap;
+use crate::gltf_uv::{UvMap, wrap};
 use crate::mesh::Primitive;
 use crate::obj::file_stem;
+use crate::texture::Wrap;
 use crate::{Camera, Light, Material, Scene, SceneError};
 
 /// Loads a glTF or GLB file into a scene. Call [`Scene::finish`] (or use [`crate::load`])
@@ -69,11 +70,16 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
                     .copied()
             })
             .flatten();
+        let albedo_wrap = pbr.base_color_texture().map_or([Wrap::Repeat; 2], |info| {
+            let sampler = info.texture().sampler();
+            [sampler.wrap_s(), sampler.wrap_t()].map(wrap)
+        });
         let strength = m.emissive_strength().unwrap_or(1.0);
         scene.materials.push(Material {
             name: m.name().unwrap_or("unnamed").to_string(),
             albedo: Vec3::new(r, g, b),
             albedo_texture,
+            albedo_wrap,
             emission: Vec3::from_array(m.emissive_factor()) * strength,
         });
     }

@@ -1,7 +1,19 @@
 //! The texture coordinates a glTF material's base colour reads: its `texCoord` set and its
 //! `KHR_texture_transform` (offset, rotation, scale: uv' = T R S uv, the extension's
 //! matrices), applied to the primitive's coordinates when it is loaded, since a
-//! primitive has one material.
+//! primitive has one material; and the wrap modes of the texture's sampler, which apply
+//! where the texture is read.
+
+use crate::texture::Wrap;
+
+/// glTF's sampler wrap mode as lgh's [`Wrap`].
+pub(crate) fn wrap(mode: gltf::texture::WrappingMode) -> Wrap {
+    match mode {
+        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+        gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
+        gltf::texture::WrappingMode::MirroredRepeat => Wrap::Mirror,
+    }
+}
 
 /// The coordinate set and transform of a base-colour texture.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -81,7 +93,8 @@ mod tests {
     }
 
     /// A file whose base colour reads TEXCOORD_1 through a transform (scale 2, offset 0.25
-    /// in u) loads with the transformed second set (v flipped as lgh's textures read it).
+    /// in u) loads with the transformed second set (v flipped as lgh's textures read it),
+    /// and with its sampler's wrap modes.
     #[test]
     fn a_file_loads_with_its_materials_set_and_transform() {
         let f32s = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
@@ -97,7 +110,8 @@ mod tests {
 "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1,"TEXCOORD_1":2}},"material":0}}]}}],
 "materials":[{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0,"texCoord":1,
   "extensions":{{"KHR_texture_transform":{{"offset":[0.25,0],"scale":[2,2]}}}}}}}}}}],
-"textures":[{{"source":0}}],"images":[{{"uri":"missing.png"}}],
+"textures":[{{"source":0,"sampler":0}}],"images":[{{"uri":"missing.png"}}],
+"samplers":[{{"wrapS":33071,"wrapT":33648}}],
 "buffers":[{{"uri":"data:application/octet-stream;base64,{data}","byteLength":{}}}],
 "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":24}},
   {{"buffer":0,"byteOffset":60,"byteLength":24}}],
@@ -114,6 +128,8 @@ mod tests {
         let uvs: Vec<[f32; 2]> = scene.mesh.uvs.iter().map(|t| [t.x, t.y]).collect();
         // (u, v) -> (2u + 0.25, 2v), then v -> 1 - v.
         assert_eq!(uvs, vec![[0.25, 1.0], [1.25, 1.0], [0.25, 0.0]]);
+        // The sampler's CLAMP_TO_EDGE in u and MIRRORED_REPEAT in v.
+        assert_eq!(scene.materials[0].albedo_wrap, [Wrap::Clamp, Wrap::Mirror]);
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

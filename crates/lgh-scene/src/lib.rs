@@ -32,6 +32,7 @@ mod gltf_uv;
 pub mod light;
 pub mod material;
 pub mod mesh;
+mod mtl_map;
 pub mod obj;
 pub mod scene;
 pub mod scene_file;

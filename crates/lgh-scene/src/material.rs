@@ -2,7 +2,7 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::texture::Texture;
+use crate::texture::{Texture, Wrap};
 
 /// A Lambertian material: albedo = `albedo` x texture (if any); emitted radiance `emission`
 /// (one-sided, on the front face: counter-clockwise winding, as in glTF and OBJ).
@@ -14,6 +14,9 @@ pub struct Material {
     pub albedo: Vec3,
     /// Index into [`crate::Scene::textures`] of a colour texture multiplied with `albedo`.
     pub albedo_texture: Option<u32>,
+    /// How `albedo_texture` reads beyond [0, 1] in u and in v (glTF's sampler of the
+    /// reference, MTL's `-clamp`).
+    pub albedo_wrap: [Wrap; 2],
     /// Emitted radiance (linear RGB, W / (sr m^2)); zero for non-emitters.
     pub emission: Vec3,
 }
@@ -24,6 +27,7 @@ impl Default for Material {
             name: "default".into(),
             albedo: Vec3::splat(0.8),
             albedo_texture: None,
+            albedo_wrap: [Wrap::Repeat; 2],
             emission: Vec3::ZERO,
         }
     }
@@ -47,7 +51,7 @@ impl Material {
         let t = self
             .albedo_texture
             .and_then(|i| textures.get(i as usize))
-            .map_or(Vec3::ONE, |t| t.sample(uv));
+            .map_or(Vec3::ONE, |t| t.sample_wrapped(uv, self.albedo_wrap));
         (self.albedo * t).clamp(Vec3::ZERO, Vec3::ONE)
     }
 

@@ -1,7 +1,8 @@
 //! Wavefront OBJ/MTL loading (with the `tobj` crate).
 //!
 //! Faces are triangulated; `Kd` is the albedo, `map_Kd` its texture (sRGB, relative to the
-//! MTL file), `Ke` the emitted radiance. A missing MTL file or texture is a warning, not an
+//! MTL file; its options `-clamp`, `-o` and `-s` are read: `mtl_map.rs`), `Ke` the
+//! emitted radiance. A missing MTL file or texture is a warning, not an
 //! error: the geometry still renders with default materials. What old exporters wrote and
 //! the parser does not read is mended, with a warning: files in ISO-8859-1 or UTF-16
 //! (decoded first), Windows path separators, colours of one number, materials and
@@ -16,7 +17,9 @@ use glam::{Mat4, Vec2, Vec3};
 
 use crate::error::contain_panics;
 use crate::mesh::Primitive;
+use crate::mtl_map;
 use crate::text;
+use crate::texture::Wrap;
 use crate::texture_file::{TexelBudget, TextureError};
 use crate::{Material, Scene, SceneError};
 
@@ -82,6 +85,8 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     };
     let mut budget = TexelBudget::default();
     let mut loaded = HashMap::new();
+    // Per material, the options of its `map_Kd` that move the texture coordinates.
+    let mut maps = Vec::with_capacity(obj_materials.len());
     for m in &obj_materials {
         if let Some(illum) = m.illumination_model.filter(|i| (3..=9).contains(i)) {
             let kd = m.diffuse.unwrap_or([0.8; 3]);
@@ -91,16 +96,21 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
                 m.name, kd[0], kd[1], kd[2]
             ));
         }
-        let albedo_texture = match m.diffuse_texture.as_deref() {
-            Some(name) => load_texture(&mut scene, &mut budget, &mut loaded, &beside(dir, name))?,
-            None => None,
+        let map = m.diffuse_texture.as_deref().map(mtl_map::parse);
+        let albedo_texture = match &map {
+            Some(map) if !map.file.is_empty() => {
+                load_texture(&mut scene, &mut budget, &mut loaded, &beside(dir, map.file))?
+            }
+            _ => None,
         };
         scene.materials.push(Material {
             name: m.name.clone(),
             albedo: m.diffuse.map_or(Vec3::splat(0.8), Vec3::from_array),
             albedo_texture,
+            albedo_wrap: [map.as_ref().map_or(Wrap::Repeat, |m| m.wrap); 2],
             emission: m.emissive.map_or(Vec3::ZERO, Vec3::from_array),
         });
+        maps.push(map.filter(|m| !m.keeps_coordinates()));
     }
     let default_material = scene.materials.len() as u32;
     let mut uses_default = false;
@@ -124,11 +134,16 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
                 .chunks_exact(3)
                 .map(|n| Vec3::new(n[0], n[1], n[2]))
                 .collect(),
-            uvs: m
-                .texcoords
-                .chunks_exact(2)
-                .map(|t| Vec2::new(t[0], t[1]))
-                .collect(),
+            uvs: {
+                let map = maps.get(material as usize).and_then(Option::as_ref);
+                m.texcoords
+                    .chunks_exact(2)
+                    .map(|t| {
+                        let uv = Vec2::new(t[0], t[1]);
+                        map.map_or(uv, |map| map.apply(uv))
+                    })
+                    .collect()
+            },
             indices: m
                 .indices
                 .chunks_exact(3)
@@ -336,6 +351,40 @@ mod tests {
                 .take(8)
                 .all(|m| m.albedo_texture == Some(0))
         );
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    /// `map_Kd -clamp on -s 2 3 -o 0.5 0 t.png` loads t.png, clamped, and moves the
+    /// coordinates of that material's faces (uv * s + o) and of no other's.
+    #[test]
+    fn texture_options_are_read_before_the_file_name() {
+        let d = dir("map-options");
+        image::RgbImage::new(4, 4).save(d.join("t.png")).unwrap();
+        let mtl = "newmtl a\nmap_Kd -clamp on -s 2 3 -o 0.5 0 t.png\nnewmtl b\nmap_Kd t.png\n";
+        std::fs::write(d.join("m.mtl"), mtl).unwrap();
+        let obj = format!("mtllib m.mtl\n{QUAD}usemtl a\nf 1/1 3/3 2/2\nusemtl b\nf 1/1 4/4 3/3\n");
+        std::fs::write(d.join("s.obj"), obj).unwrap();
+        let scene = load(&d.join("s.obj")).unwrap();
+        assert_eq!(scene.textures.len(), 1, "{:?}", scene.report.warnings);
+        let [a, b] = [&scene.materials[0], &scene.materials[1]];
+        assert_eq!(
+            (a.albedo_texture, a.albedo_wrap),
+            (Some(0), [Wrap::Clamp; 2])
+        );
+        assert_eq!(
+            (b.albedo_texture, b.albedo_wrap),
+            (Some(0), [Wrap::Repeat; 2])
+        );
+        // Each triangle's coordinates: a's corner vt 3 = (1, 1) becomes (2.5, 3).
+        let uvs_of = |material: u32| -> Vec<Vec2> {
+            let mesh = &scene.mesh;
+            (0..mesh.triangles.len())
+                .filter(|&t| mesh.materials[t] == material)
+                .flat_map(|t| mesh.triangles[t].map(|i| mesh.uvs[i as usize]))
+                .collect()
+        };
+        assert!(uvs_of(0).contains(&Vec2::new(2.5, 3.0)), "{:?}", uvs_of(0));
+        assert!(uvs_of(1).iter().all(|uv| uv.max_element() <= 1.0));
         let _ = std::fs::remove_dir_all(&d);
     }
 

@@ -3,7 +3,7 @@
 use glam::{Vec2, Vec3};
 
 /// An RGB texture in linear space (sRGB-encoded images are decoded on load), sampled
-/// bilinearly with repeat wrapping.
+/// bilinearly; what lies beyond its borders is the [`Wrap`] of the reference that reads it.
 #[derive(Clone, Debug)]
 pub struct Texture {
     /// Width in texels.
@@ -23,6 +23,51 @@ pub fn srgb_to_linear(c: f32) -> f32 {
         c / 12.92
     } else {
         ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// What a texture reads outside [0, 1] along one axis: glTF's sampler wrap modes (`wrapS`,
+/// `wrapT`), the MTL format's `-clamp on` and OBJ's default repeat.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Wrap {
+    /// The texture tiles the plane (glTF `REPEAT`, the default of both formats).
+    #[default]
+    Repeat = 0,
+    /// The border texels extend outwards (glTF `CLAMP_TO_EDGE`, MTL `-clamp on`).
+    Clamp = 1,
+    /// Every other tile is mirrored (glTF `MIRRORED_REPEAT`).
+    Mirror = 2,
+}
+
+impl Wrap {
+    /// The coordinate `t` brought into [0, 1] (into [0, 1) for `Repeat`).
+    #[inline]
+    #[must_use]
+    pub fn coordinate(self, t: f32) -> f32 {
+        match self {
+            Self::Repeat => t.rem_euclid(1.0),
+            Self::Clamp => t.clamp(0.0, 1.0),
+            // A triangle wave of period 2: 0 at even integers, 1 at odd ones.
+            Self::Mirror => 1.0 - (t.rem_euclid(2.0) - 1.0).abs(),
+        }
+    }
+
+    /// The texel of index `i` of an axis of `n` texels. For `Mirror` the coordinate is
+    /// already folded, so the one texel each side of the axis is its border texel, as GL's
+    /// mirrored repeat reads it.
+    #[inline]
+    #[must_use]
+    pub fn texel(self, i: i64, n: i64) -> usize {
+        match self {
+            Self::Repeat => i.rem_euclid(n) as usize,
+            Self::Clamp | Self::Mirror => i.clamp(0, n - 1) as usize,
+        }
+    }
+
+    /// Its code in the GPU's material words (`surface.wgsl`'s `wrap_coordinate`).
+    #[must_use]
+    pub fn code(self) -> u32 {
+        self as u32
     }
 }
 
@@ -52,16 +97,20 @@ impl Texture {
     /// loader's flip), wrapping around at the borders.
     #[must_use]
     pub fn sample(&self, uv: Vec2) -> Vec3 {
+        self.sample_wrapped(uv, [Wrap::Repeat; 2])
+    }
+
+    /// Bilinear lookup at texture coordinate `uv` with the wrap of u and of v. The glTF
+    /// loader's flip of v (v' = 1 - v) commutes with every wrap, so glTF's modes apply to
+    /// v' unchanged.
+    #[must_use]
+    pub fn sample_wrapped(&self, uv: Vec2, [wu, wv]: [Wrap; 2]) -> Vec3 {
         let (w, h) = (self.width as i64, self.height as i64);
-        let x = uv.x.rem_euclid(1.0) * w as f32 - 0.5;
-        let y = (1.0 - uv.y.rem_euclid(1.0)) * h as f32 - 0.5;
+        let x = wu.coordinate(uv.x) * w as f32 - 0.5;
+        let y = (1.0 - wv.coordinate(uv.y)) * h as f32 - 0.5;
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
-        let at = |xi: i64, yi: i64| {
-            let xi = xi.rem_euclid(w) as usize;
-            let yi = yi.rem_euclid(h) as usize;
-            self.texels[yi * w as usize + xi]
-        };
+        let at = |xi: i64, yi: i64| self.texels[wv.texel(yi, h) * w as usize + wu.texel(xi, w)];
         let (x0, y0) = (x0 as i64, y0 as i64);
         let top = at(x0, y0).lerp(at(x0 + 1, y0), fx);
         let bottom = at(x0, y0 + 1).lerp(at(x0 + 1, y0 + 1), fx);
@@ -92,5 +141,62 @@ mod tests {
             assert!((t.sample(uv) - Vec3::ONE).abs().max_element() < 1e-6);
         }
         assert!(Texture::from_srgb8(0, 2, 4, &[]).is_none());
+    }
+
+    /// A 2 x 1 texture, black then white, read at texel centres beyond its borders: past
+    /// u = 1 repeat starts black again, clamp stays white, mirror turns back to black; the
+    /// same in v.
+    #[test]
+    fn wraps_read_beyond_the_borders_as_their_modes_say() {
+        let t = Texture::from_srgb8(2, 1, 3, &[0, 0, 0, 255, 255, 255]).unwrap();
+        let tv = Texture::from_srgb8(1, 2, 3, &[255, 255, 255, 0, 0, 0]).unwrap();
+        let lum = |c: Vec3| c.x;
+        for (wrap, at) in [
+            (
+                Wrap::Repeat,
+                [(1.25, 0.0), (1.75, 1.0), (-0.25, 1.0), (-0.75, 0.0)],
+            ),
+            (
+                Wrap::Clamp,
+                [(1.25, 1.0), (1.75, 1.0), (-0.25, 0.0), (-0.75, 0.0)],
+            ),
+            (
+                Wrap::Mirror,
+                [(1.25, 1.0), (1.75, 0.0), (-0.25, 0.0), (-0.75, 1.0)],
+            ),
+        ] {
+            for (u, want) in at {
+                let got = lum(t.sample_wrapped(Vec2::new(u, 0.3), [wrap, Wrap::Repeat]));
+                assert!((got - want).abs() < 1e-6, "{wrap:?} u {u}: {got}");
+                // The texture turned on its side: v up, so its bottom (black) row is v = 0.
+                let got = lum(tv.sample_wrapped(Vec2::new(0.3, u), [Wrap::Repeat, wrap]));
+                assert!((got - want).abs() < 1e-6, "{wrap:?} v {u}: {got}");
+            }
+        }
+        // Inside [0, 1] the three agree.
+        for u in [0.05, 0.4, 0.5, 0.77, 0.95] {
+            let r = t.sample(Vec2::new(u, 0.5));
+            for wrap in [Wrap::Clamp, Wrap::Mirror] {
+                let got = t.sample_wrapped(Vec2::new(u, 0.5), [wrap; 2]);
+                let inner = (0.25..=0.75).contains(&u);
+                assert!(
+                    !inner || (got - r).abs().max_element() < 1e-6,
+                    "{wrap:?} {u}"
+                );
+            }
+        }
+    }
+
+    /// glTF's flip of v commutes with every wrap: wrap(1 - v) = 1 - wrap(v) (for repeat up
+    /// to the integer at 1).
+    #[test]
+    fn the_flip_of_v_commutes_with_each_wrap() {
+        for wrap in [Wrap::Repeat, Wrap::Clamp, Wrap::Mirror] {
+            for v in [-2.3f32, -1.0, -0.4, 0.0, 0.2, 0.5, 1.7, 3.25] {
+                let (a, b) = (wrap.coordinate(1.0 - v), 1.0 - wrap.coordinate(v));
+                let d = (a - b).abs();
+                assert!(d < 1e-5 || (wrap == Wrap::Repeat && (d - 1.0).abs() < 1e-5));
+            }
+        }
     }
 }

@@ -16,7 +16,8 @@ struct TriShade {
 }
 
 // A material: albedo factor (w: the texture's index, as bits; NO_TEXTURE for none) and
-// emitted radiance.
+// emitted radiance (w: the texture's wrap in u | in v << 2, as bits: lgh-scene's
+// Wrap::code).
 struct Material {
     albedo: vec4<f32>,
     emission: vec4<f32>,
@@ -51,10 +52,32 @@ fn texel(at: u32) -> vec3<f32> {
     );
 }
 
-// Rust's f32::rem_euclid(x, 1.0).
-fn wrap01(x: f32) -> f32 {
-    let r = x % 1.0;
-    return select(r, r + 1.0, r < 0.0);
+// Rust's f32::rem_euclid(x, m).
+fn rem_euclid(x: f32, m: f32) -> f32 {
+    let r = x % m;
+    return select(r, r + m, r < 0.0);
+}
+
+const WRAP_REPEAT: u32 = 0u;
+const WRAP_CLAMP: u32 = 1u;
+
+// lgh-scene's Wrap::coordinate: t brought into [0, 1].
+fn wrap_coordinate(t: f32, wrap: u32) -> f32 {
+    if (wrap == WRAP_REPEAT) {
+        return rem_euclid(t, 1.0);
+    }
+    if (wrap == WRAP_CLAMP) {
+        return clamp(t, 0.0, 1.0);
+    }
+    return 1.0 - abs(rem_euclid(t, 2.0) - 1.0);
+}
+
+// lgh-scene's Wrap::texel: the texel of index i of an axis of n.
+fn wrap_texel(i: i32, n: i32, wrap: u32) -> i32 {
+    if (wrap == WRAP_REPEAT) {
+        return ((i % n) + n) % n;
+    }
+    return clamp(i, 0, n - 1);
 }
 
 // glam's Vec3::lerp.
@@ -62,22 +85,24 @@ fn lerp3(a: vec3<f32>, b: vec3<f32>, s: f32) -> vec3<f32> {
     return a * (1.0 - s) + b * s;
 }
 
-// lgh-scene's Texture::sample: bilinear, wrapping at the borders, v up.
-fn sample_texture(k: u32, uv: vec2<f32>) -> vec3<f32> {
+// lgh-scene's Texture::sample_wrapped: bilinear, v up, `wrap` in u | in v << 2.
+fn sample_texture(k: u32, uv: vec2<f32>, wrap: u32) -> vec3<f32> {
     let head = TEXTURE_HEADERS + 4u * k;
     let first = texels[head];
     let w = i32(texels[head + 1u]);
     let h = i32(texels[head + 2u]);
-    let x = wrap01(uv.x) * f32(w) - 0.5;
-    let y = (1.0 - wrap01(uv.y)) * f32(h) - 0.5;
+    let wu = wrap & 3u;
+    let wv = (wrap >> 2u) & 3u;
+    let x = wrap_coordinate(uv.x, wu) * f32(w) - 0.5;
+    let y = (1.0 - wrap_coordinate(uv.y, wv)) * f32(h) - 0.5;
     let x0 = floor(x);
     let y0 = floor(y);
     let fx = x - x0;
     let fy = y - y0;
-    let xa = ((i32(x0) % w) + w) % w;
-    let xb = ((i32(x0) + 1) % w + w) % w;
-    let ya = ((i32(y0) % h) + h) % h;
-    let yb = ((i32(y0) + 1) % h + h) % h;
+    let xa = wrap_texel(i32(x0), w, wu);
+    let xb = wrap_texel(i32(x0) + 1, w, wu);
+    let ya = wrap_texel(i32(y0), h, wv);
+    let yb = wrap_texel(i32(y0) + 1, h, wv);
     let top = lerp3(texel(first + u32(ya * w + xa)), texel(first + u32(ya * w + xb)), fx);
     let bottom = lerp3(texel(first + u32(yb * w + xa)), texel(first + u32(yb * w + xb)), fx);
     return lerp3(top, bottom, fy);
@@ -112,7 +137,7 @@ fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
     let k = bitcast<u32>(m.albedo.w);
     var t = vec3<f32>(1.0);
     if (k != NO_TEXTURE) {
-        t = sample_texture(k, uv);
+        t = sample_texture(k, uv, bitcast<u32>(m.emission.w));
         if (any(abs(t) > vec3<f32>(3.4e38)) || any(t != t)) {
             t = vec3<f32>(0.0);
         }
