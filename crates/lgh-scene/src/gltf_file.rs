@@ -2,8 +2,8 @@
 //! `.glb`.
 //!
 //! Read: triangle primitives of every node of the default scene with their node transforms;
-//! base colour factor x base colour texture; emissive factor x `KHR_materials_emissive_strength`;
-//! the first perspective camera; `KHR_lights_punctual` point, spot and directional lights
+//! base colour factor x base colour texture; emissive factor x `KHR_materials_emissive_strength`
+//! x the emissive texture's mean over each triangle (`gltf_emission.rs`); the first perspective camera; `KHR_lights_punctual` point, spot and directional lights
 //! (colour x intensity taken as radiant intensity or irradiance). Not read: metallic-roughness,
 //! normal maps, skins, morph targets (the surfaces are diffuse).
 
@@ -12,6 +12,7 @@ use std::path::Path;
 use glam::{Mat4, Vec2, Vec3};
 
 use crate::error::contain_panics;
+use crate::gltf_emission::{EmissiveMap, Emitters};
 use crate::gltf_uv::{UvMap, wrap};
 use crate::mesh::Primitive;
 use crate::obj::file_stem;
@@ -53,9 +54,11 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
             scene.textures.len() as u32 - 1
         }));
     }
-    // Per material, the texture coordinates its base colour reads.
+    // Per material, the texture coordinates its base colour reads, and its emissive texture.
     let mut uv_maps = Vec::with_capacity(doc.materials().len());
+    let mut emissive_maps = Vec::with_capacity(doc.materials().len());
     for m in doc.materials() {
+        emissive_maps.push(EmissiveMap::of(&m, &texture_of_image));
         let pbr = m.pbr_metallic_roughness();
         let [r, g, b, _] = pbr.base_color_factor();
         uv_maps.push(
@@ -92,6 +95,7 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
         .ok_or_else(|| SceneError::new(path, "the glTF file has no scene"))?;
     let mut stack: Vec<(gltf::Node, Mat4)> = gscene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     let mut skipped_modes = 0usize;
+    let mut emitters = Emitters::default();
     // glTF nodes form strict trees: a node met twice has two parents or is its own ancestor
     // (a cycle, which would never end).
     let mut seen = vec![false; doc.nodes().len()];
@@ -138,17 +142,7 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
                     .unwrap_or_default();
                 let material = p.material().index().map_or(default_material, |i| i as u32);
                 let map = uv_maps.get(material as usize).unwrap_or(&UvMap::IDENTITY);
-                let uvs = reader
-                    .read_tex_coords(map.set)
-                    .map(|it| {
-                        it.into_f32()
-                            .map(|uv| {
-                                let [u, v] = map.apply(uv);
-                                Vec2::new(u, 1.0 - v)
-                            })
-                            .collect()
-                    })
-                    .unwrap_or_default();
+                let uvs = read_uvs(&reader, map);
                 let prim = Primitive {
                     positions,
                     normals,
@@ -156,7 +150,15 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
                     indices,
                     material,
                 };
-                scene.mesh.append(&prim, m, &object);
+                match emissive_maps.get(material as usize).copied().flatten() {
+                    Some(e) => {
+                        let uvs = read_uvs(&reader, &e.uv);
+                        let of = emitters.materials(&mut scene, material, &e, &uvs, &prim.indices);
+                        let material_of = |k: usize| of.get(k).copied().unwrap_or(material);
+                        scene.mesh.append_with(&prim, m, &object, material_of);
+                    }
+                    None => scene.mesh.append(&prim, m, &object),
+                }
             }
         }
         if scene.camera.is_none()
@@ -183,6 +185,25 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
         ));
     }
     Ok(scene)
+}
+
+/// A primitive's texture coordinates of `map`'s set, transformed, with v up (lgh's
+/// textures' convention); empty where it has none.
+fn read_uvs<'a, 's, F>(reader: &gltf::mesh::Reader<'a, 's, F>, map: &UvMap) -> Vec<Vec2>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    reader
+        .read_tex_coords(map.set)
+        .map(|it| {
+            it.into_f32()
+                .map(|uv| {
+                    let [u, v] = map.apply(uv);
+                    Vec2::new(u, 1.0 - v)
+                })
+                .collect()
+        })
+        .unwrap_or_default()
 }
 
 /// The version of a glTF file older than 2.0 (`"1.0"`; the GLB header's version for `.glb`),

@@ -26,6 +26,7 @@ pub mod cornell;
 pub mod emitter_room;
 pub mod error;
 pub mod file_kind;
+mod gltf_emission;
 pub mod gltf_file;
 pub mod gltf_import;
 mod gltf_uv;

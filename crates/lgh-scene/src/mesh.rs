@@ -70,6 +70,18 @@ impl Mesh {
     /// transpose. Indices that point past the vertex arrays are dropped (the loaders validate
     /// first).
     pub fn append(&mut self, prim: &Primitive, to_world: Mat4, object: &str) {
+        self.append_with(prim, to_world, object, |_| prim.material);
+    }
+
+    /// [`Mesh::append`] with the material of each of `prim`'s triangles (by its index in
+    /// `prim.indices`) from `material_of`, in place of `prim.material`.
+    pub fn append_with(
+        &mut self,
+        prim: &Primitive,
+        to_world: Mat4,
+        object: &str,
+        material_of: impl Fn(usize) -> u32,
+    ) {
         let object = self.object_id(object);
         let base = self.positions.len() as u32;
         let normal_m = to_world.inverse().transpose();
@@ -84,10 +96,10 @@ impl Mesh {
         }));
         self.uvs
             .extend((0..n).map(|i| prim.uvs.get(i).copied().unwrap_or(Vec2::ZERO)));
-        for t in &prim.indices {
+        for (k, t) in prim.indices.iter().enumerate() {
             if t.iter().all(|&i| (i as usize) < n) {
                 self.triangles.push([t[0] + base, t[1] + base, t[2] + base]);
-                self.materials.push(prim.material);
+                self.materials.push(material_of(k));
                 self.objects.push(object);
             }
         }
