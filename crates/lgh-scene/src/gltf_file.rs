@@ -2,17 +2,18 @@
 //! `.glb`.
 //!
 //! Read: triangle primitives of every node of the default scene with their node transforms;
-//! base colour factor x base colour texture; emissive factor x `KHR_materials_emissive_strength`
-//! x the emissive texture's mean over each triangle (`gltf_emission.rs`); the first perspective camera; `KHR_lights_punctual` point, spot and directional lights
-//! (colour x intensity taken as radiant intensity or irradiance). Not read: metallic-roughness,
-//! normal maps, skins, morph targets (the surfaces are diffuse).
+//! base colour factor x base colour texture; emissive factor x
+//! `KHR_materials_emissive_strength` x the emissive texture's mean over each triangle
+//! (`emissive_texture.rs`); the first perspective camera; `KHR_lights_punctual` point, spot
+//! and directional lights (colour x intensity taken as radiant intensity or irradiance). Not
+//! read: metallic-roughness, normal maps, skins, morph targets (the surfaces are diffuse).
 
 use std::path::Path;
 
 use glam::{Mat4, Vec2, Vec3};
 
+use crate::emissive_texture::{EmissiveMap, Emitters};
 use crate::error::contain_panics;
-use crate::gltf_emission::{EmissiveMap, Emitters};
 use crate::gltf_uv::{UvMap, wrap};
 use crate::mesh::Primitive;
 use crate::obj::file_stem;

@@ -23,10 +23,10 @@
 pub mod animation;
 pub mod camera;
 pub mod cornell;
+mod emissive_texture;
 pub mod emitter_room;
 pub mod error;
 pub mod file_kind;
-mod gltf_emission;
 pub mod gltf_file;
 pub mod gltf_import;
 mod gltf_uv;

@@ -2,11 +2,11 @@
 //!
 //! Faces are triangulated; `Kd` is the albedo, `map_Kd` its texture (sRGB, relative to the
 //! MTL file; its options `-clamp`, `-o` and `-s` are read: `mtl_map.rs`), `Ke` the
-//! emitted radiance. A missing MTL file or texture is a warning, not an
-//! error: the geometry still renders with default materials. What old exporters wrote and
-//! the parser does not read is mended, with a warning: files in ISO-8859-1 or UTF-16
-//! (decoded first), Windows path separators, colours of one number, materials and
-//! `usemtl` without a name.
+//! emitted radiance, times `map_Ke`'s mean over each triangle (`emissive_texture.rs`). A
+//! missing MTL file or texture is a warning, not an error: the geometry still renders with
+//! default materials. What old exporters wrote and the parser does not read is mended, with
+//! a warning: files in ISO-8859-1 or UTF-16 (decoded first), Windows path separators,
+//! colours of one number, materials and `usemtl` without a name.
 
 use std::cell::RefCell;
 use std::collections::HashMap;
@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec2, Vec3};
 
+use crate::emissive_texture::{EmissiveMap, Emitters};
 use crate::error::contain_panics;
 use crate::mesh::Primitive;
 use crate::mtl_map;
@@ -87,6 +88,9 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let mut loaded = HashMap::new();
     // Per material, the options of its `map_Kd` that move the texture coordinates.
     let mut maps = Vec::with_capacity(obj_materials.len());
+    // Per material, its emissive texture and the options of its `map_Ke`.
+    let mut emissive_maps = Vec::with_capacity(obj_materials.len());
+    let mut emitters = Emitters::default();
     for m in &obj_materials {
         if let Some(illum) = m.illumination_model.filter(|i| (3..=9).contains(i)) {
             let kd = m.diffuse.unwrap_or([0.8; 3]);
@@ -103,14 +107,25 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             }
             _ => None,
         };
+        let emission = m.emissive.map_or(Vec3::ZERO, Vec3::from_array);
+        // `map_Ke` (an extension of the format that exporters write), where it emits.
+        let emissive = match m.unknown_param.get("map_Ke").map(|s| mtl_map::parse(s)) {
+            Some(map) if !map.file.is_empty() && emission.max_element() > 0.0 => {
+                let path = beside(dir, map.file);
+                load_texture(&mut scene, &mut budget, &mut loaded, &path)?
+                    .map(|t| (EmissiveMap::new(t, map.wrap), map))
+            }
+            _ => None,
+        };
         scene.materials.push(Material {
             name: m.name.clone(),
             albedo: m.diffuse.map_or(Vec3::splat(0.8), Vec3::from_array),
             albedo_texture,
             albedo_wrap: [map.as_ref().map_or(Wrap::Repeat, |m| m.wrap); 2],
-            emission: m.emissive.map_or(Vec3::ZERO, Vec3::from_array),
+            emission,
         });
         maps.push(map.filter(|m| !m.keeps_coordinates()));
+        emissive_maps.push(emissive);
     }
     let default_material = scene.materials.len() as u32;
     let mut uses_default = false;
@@ -151,7 +166,24 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
                 .collect(),
             material,
         };
-        scene.mesh.append(&prim, Mat4::IDENTITY, &model.name);
+        match emissive_maps
+            .get(material as usize)
+            .and_then(Option::as_ref)
+        {
+            Some((e, map)) => {
+                let uvs: Vec<Vec2> = m
+                    .texcoords
+                    .chunks_exact(2)
+                    .map(|t| map.apply(Vec2::new(t[0], t[1])))
+                    .collect();
+                let of = emitters.materials(&mut scene, material, e, &uvs, &prim.indices);
+                let material_of = |k: usize| of.get(k).copied().unwrap_or(material);
+                scene
+                    .mesh
+                    .append_with(&prim, Mat4::IDENTITY, &model.name, material_of);
+            }
+            None => scene.mesh.append(&prim, Mat4::IDENTITY, &model.name),
+        }
     }
     if uses_default {
         scene.materials.push(Material::default());
@@ -385,6 +417,34 @@ mod tests {
         };
         assert!(uvs_of(0).contains(&Vec2::new(2.5, 3.0)), "{:?}", uvs_of(0));
         assert!(uvs_of(1).iter().all(|uv| uv.max_element() <= 1.0));
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    /// `map_Ke` (white on the left half, black on the right) makes the triangle over the
+    /// left half an emitter of `Ke` and the one over the right half no light; a material
+    /// with `map_Ke` and no `Ke` emits nothing.
+    #[test]
+    fn an_emissive_texture_lights_the_triangles_over_its_lit_texels() {
+        let d = dir("map-ke");
+        image::RgbImage::from_fn(8, 8, |x, _| image::Rgb([if x < 4 { 255 } else { 0 }; 3]))
+            .save(d.join("e.png"))
+            .unwrap();
+        let mtl = "newmtl lamp\nKe 3 3 3\nmap_Ke e.png\nnewmtl dark\nmap_Ke e.png\n";
+        std::fs::write(d.join("m.mtl"), mtl).unwrap();
+        let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n\
+                   vt 0.1 0\nvt 0.4 0\nvt 0.1 1\nvt 0.6 0\nvt 0.9 0\nvt 0.9 1\n\
+                   usemtl lamp\nf 1/1 2/2 3/3\nf 1/4 2/5 3/6\nusemtl dark\nf 1/1 2/2 3/3\n";
+        std::fs::write(d.join("s.obj"), obj).unwrap();
+        let scene = load(&d.join("s.obj")).unwrap();
+        let emission = |t: usize| scene.material_of(t).emission;
+        assert_eq!(scene.mesh.triangles.len(), 3);
+        assert!(
+            (emission(0) - Vec3::splat(3.0)).abs().max_element() < 1e-3,
+            "{}",
+            emission(0)
+        );
+        assert_eq!(emission(1), Vec3::ZERO);
+        assert_eq!(emission(2), Vec3::ZERO);
         let _ = std::fs::remove_dir_all(&d);
     }
 

@@ -1,4 +1,4 @@
-//! Emissive textures of glTF materials (`emissiveTexture`), read per triangle.
+//! Emissive textures, read per triangle: glTF's `emissiveTexture` and OBJ's `map_Ke`.
 //!
 //! lgh's emitters are triangles of uniform radiance: the light sampling, the closed-form
 //! irradiance of the direct light and the VPLs' emission all take one radiance a triangle.
@@ -37,6 +37,16 @@ pub(crate) struct EmissiveMap {
 }
 
 impl EmissiveMap {
+    /// The scene's texture `texture` read at the primitive's first coordinate set as it is,
+    /// with `wrap` in u and v (OBJ's `map_Ke`).
+    pub fn new(texture: u32, wrap: Wrap) -> Self {
+        Self {
+            texture,
+            uv: UvMap::IDENTITY,
+            wrap: [wrap; 2],
+        }
+    }
+
     /// The emissive texture of `material`, where it has one that was decoded
     /// (`texture_of_image`: the scene's texture of each image) and the material emits.
     pub fn of(material: &gltf::Material<'_>, texture_of_image: &[Option<u32>]) -> Option<Self> {
