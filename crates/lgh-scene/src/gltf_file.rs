@@ -48,6 +48,19 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
             ));
         }
     }
+    // Cut-outs (leaves, fences) and blended surfaces are opaque here: say so, once.
+    let masked: Vec<&str> = doc
+        .materials()
+        .filter(|m| m.alpha_mode() != gltf::material::AlphaMode::Opaque)
+        .map(|m| m.name().unwrap_or("unnamed"))
+        .collect();
+    if let Some(first) = masked.first() {
+        scene.report.warnings.push(format!(
+            "{} materials ('{first}'{}) are alpha-masked or blended; lgh renders them opaque",
+            masked.len(),
+            if masked.len() > 1 { ", ..." } else { "" }
+        ));
+    }
     let mut texture_of_image = Vec::with_capacity(textures.len());
     for t in textures {
         texture_of_image.push(t.map(|t| {

@@ -94,7 +94,7 @@ mod tests {
 
     /// A file whose base colour reads TEXCOORD_1 through a transform (scale 2, offset 0.25
     /// in u) loads with the transformed second set (v flipped as lgh's textures read it),
-    /// and with its sampler's wrap modes.
+    /// and with its sampler's wrap modes; its alpha mask is a warning.
     #[test]
     fn a_file_loads_with_its_materials_set_and_transform() {
         let f32s = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
@@ -108,7 +108,7 @@ mod tests {
             r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_texture_transform"],
 "scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
 "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1,"TEXCOORD_1":2}},"material":0}}]}}],
-"materials":[{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0,"texCoord":1,
+"materials":[{{"alphaMode":"MASK","pbrMetallicRoughness":{{"baseColorTexture":{{"index":0,"texCoord":1,
   "extensions":{{"KHR_texture_transform":{{"offset":[0.25,0],"scale":[2,2]}}}}}}}}}}],
 "textures":[{{"source":0,"sampler":0}}],"images":[{{"uri":"missing.png"}}],
 "samplers":[{{"wrapS":33071,"wrapT":33648}}],
@@ -130,6 +130,9 @@ mod tests {
         assert_eq!(uvs, vec![[0.25, 1.0], [1.25, 1.0], [0.25, 0.0]]);
         // The sampler's CLAMP_TO_EDGE in u and MIRRORED_REPEAT in v.
         assert_eq!(scene.materials[0].albedo_wrap, [Wrap::Clamp, Wrap::Mirror]);
+        // Its alpha mask is rendered opaque, with a warning.
+        let w = &scene.report.warnings;
+        assert!(w.iter().any(|w| w.contains("alpha-masked")), "{w:?}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

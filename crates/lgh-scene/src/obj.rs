@@ -91,6 +91,20 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     // Per material, its emissive texture and the options of its `map_Ke`.
     let mut emissive_maps = Vec::with_capacity(obj_materials.len());
     let mut emitters = Emitters::default();
+    // Cut-outs (`map_d`) and transparent surfaces (`d` below 1) are opaque here: say so, once.
+    let see_through: Vec<&str> = obj_materials
+        .iter()
+        .filter(|m| m.dissolve_texture.is_some() || m.dissolve.is_some_and(|d| d < 1.0))
+        .map(|m| m.name.as_str())
+        .collect();
+    if let Some(first) = see_through.first() {
+        scene.report.warnings.push(format!(
+            "{} materials ('{first}'{}) have a cut-out (map_d) or are transparent (d < 1); \
+             lgh renders them opaque",
+            see_through.len(),
+            if see_through.len() > 1 { ", ..." } else { "" }
+        ));
+    }
     for m in &obj_materials {
         if let Some(illum) = m.illumination_model.filter(|i| (3..=9).contains(i)) {
             let kd = m.diffuse.unwrap_or([0.8; 3]);
@@ -387,12 +401,14 @@ mod tests {
     }
 
     /// `map_Kd -clamp on -s 2 3 -o 0.5 0 t.png` loads t.png, clamped, and moves the
-    /// coordinates of that material's faces (uv * s + o) and of no other's.
+    /// coordinates of that material's faces (uv * s + o) and of no other's; its `map_d` is
+    /// a warning.
     #[test]
     fn texture_options_are_read_before_the_file_name() {
         let d = dir("map-options");
         image::RgbImage::new(4, 4).save(d.join("t.png")).unwrap();
-        let mtl = "newmtl a\nmap_Kd -clamp on -s 2 3 -o 0.5 0 t.png\nnewmtl b\nmap_Kd t.png\n";
+        let mtl = "newmtl a\nmap_Kd -clamp on -s 2 3 -o 0.5 0 t.png\nmap_d t.png\n\
+                   newmtl b\nmap_Kd t.png\n";
         std::fs::write(d.join("m.mtl"), mtl).unwrap();
         let obj = format!("mtllib m.mtl\n{QUAD}usemtl a\nf 1/1 3/3 2/2\nusemtl b\nf 1/1 4/4 3/3\n");
         std::fs::write(d.join("s.obj"), obj).unwrap();
@@ -417,6 +433,12 @@ mod tests {
         };
         assert!(uvs_of(0).contains(&Vec2::new(2.5, 3.0)), "{:?}", uvs_of(0));
         assert!(uvs_of(1).iter().all(|uv| uv.max_element() <= 1.0));
+        // Its cut-out is rendered opaque, with a warning naming the material.
+        let w = &scene.report.warnings;
+        assert!(
+            w.iter().any(|w| w.contains("cut-out") && w.contains("'a'")),
+            "{w:?}"
+        );
         let _ = std::fs::remove_dir_all(&d);
     }
 
