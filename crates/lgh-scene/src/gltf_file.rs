@@ -258,17 +258,20 @@ fn triangle_list(
         return Err("no POSITION attribute".into());
     };
     check_accessor(&position, buffers)?;
-    for semantic in [Semantic::Normals, Semantic::TexCoords(0)] {
-        if let Some(a) = p.get(&semantic) {
-            check_accessor(&a, buffers)?;
-            if a.count() != position.count() {
-                return Err(format!(
-                    "accessor {} ({semantic:?}) has {} elements for {} vertices",
-                    a.index(),
-                    a.count(),
-                    position.count()
-                ));
-            }
+    // Every attribute lgh may read: the normals and each coordinate set (a material may
+    // read any of them, `gltf_uv`, `emissive_texture`).
+    let read = p
+        .attributes()
+        .filter(|(s, _)| matches!(s, Semantic::Normals | Semantic::TexCoords(_)));
+    for (semantic, a) in read {
+        check_accessor(&a, buffers)?;
+        if a.count() != position.count() {
+            return Err(format!(
+                "accessor {} ({semantic:?}) has {} elements for {} vertices",
+                a.index(),
+                a.count(),
+                position.count()
+            ));
         }
     }
     let vertices = position.count();

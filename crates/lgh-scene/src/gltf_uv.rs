@@ -97,6 +97,45 @@ mod tests {
     /// and with its sampler's wrap modes; its alpha mask is a warning.
     #[test]
     fn a_file_loads_with_its_materials_set_and_transform() {
+        let scene = load(&transformed_file(3)).unwrap();
+        let uvs: Vec<[f32; 2]> = scene.mesh.uvs.iter().map(|t| [t.x, t.y]).collect();
+        // (u, v) -> (2u + 0.25, 2v), then v -> 1 - v.
+        assert_eq!(uvs, vec![[0.25, 1.0], [1.25, 1.0], [0.25, 0.0]]);
+        // The sampler's CLAMP_TO_EDGE in u and MIRRORED_REPEAT in v.
+        assert_eq!(scene.materials[0].albedo_wrap, [Wrap::Clamp, Wrap::Mirror]);
+        // Its alpha mask is rendered opaque, with a warning.
+        let w = &scene.report.warnings;
+        assert!(w.iter().any(|w| w.contains("alpha-masked")), "{w:?}");
+    }
+
+    /// The second coordinate set shorter than the positions is refused with one line
+    /// naming it (only the first set was checked, and a material may read any).
+    #[test]
+    fn a_short_second_coordinate_set_is_refused() {
+        let e = load(&transformed_file(2)).unwrap_err().to_string();
+        assert!(
+            e.contains("TexCoords(1)") && e.contains("2 elements"),
+            "{e}"
+        );
+    }
+
+    /// The gltf_file loader's result for `json`, written to a file of its own.
+    fn load(json: &str) -> Result<crate::Scene, crate::SceneError> {
+        use std::sync::atomic::{AtomicU32, Ordering};
+        static N: AtomicU32 = AtomicU32::new(0);
+        let k = N.fetch_add(1, Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("lgh-gltf-uv-{}-{k}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("t.gltf");
+        std::fs::write(&path, json).unwrap();
+        let scene = crate::gltf_file::load(&path);
+        let _ = std::fs::remove_dir_all(&dir);
+        scene
+    }
+
+    /// A triangle whose base colour reads TEXCOORD_1 (`count1` elements) through a
+    /// transform, with a sampler and an alpha mask.
+    fn transformed_file(count1: usize) -> String {
         let f32s = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
         let pos = f32s(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
         let uv0 = f32s(&[0.0; 6]);
@@ -104,7 +143,7 @@ mod tests {
         let bin = [pos, uv0, uv1].concat();
         use base64::Engine;
         let data = base64::engine::general_purpose::STANDARD.encode(&bin);
-        let json = format!(
+        format!(
             r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_texture_transform"],
 "scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
 "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1,"TEXCOORD_1":2}},"material":0}}]}}],
@@ -117,22 +156,8 @@ mod tests {
   {{"buffer":0,"byteOffset":60,"byteLength":24}}],
 "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
   {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"}},
-  {{"bufferView":2,"componentType":5126,"count":3,"type":"VEC2"}}]}}"#,
+  {{"bufferView":2,"componentType":5126,"count":{count1},"type":"VEC2"}}]}}"#,
             bin.len()
-        );
-        let dir = std::env::temp_dir().join(format!("lgh-gltf-uv-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("t.gltf");
-        std::fs::write(&path, json).unwrap();
-        let scene = crate::gltf_file::load(&path).unwrap();
-        let uvs: Vec<[f32; 2]> = scene.mesh.uvs.iter().map(|t| [t.x, t.y]).collect();
-        // (u, v) -> (2u + 0.25, 2v), then v -> 1 - v.
-        assert_eq!(uvs, vec![[0.25, 1.0], [1.25, 1.0], [0.25, 0.0]]);
-        // The sampler's CLAMP_TO_EDGE in u and MIRRORED_REPEAT in v.
-        assert_eq!(scene.materials[0].albedo_wrap, [Wrap::Clamp, Wrap::Mirror]);
-        // Its alpha mask is rendered opaque, with a warning.
-        let w = &scene.report.warnings;
-        assert!(w.iter().any(|w| w.contains("alpha-masked")), "{w:?}");
-        let _ = std::fs::remove_dir_all(&dir);
+        )
     }
 }
