@@ -141,16 +141,21 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         maps.push(map.filter(|m| !m.keeps_coordinates()));
         emissive_maps.push(emissive);
     }
+    // The default material for faces without one, before the emitters' materials that
+    // the faces below may add.
     let default_material = scene.materials.len() as u32;
-    let mut uses_default = false;
+    let has_material = |id: Option<usize>| id.is_some_and(|id| id < obj_materials.len());
+    if models
+        .iter()
+        .any(|model| !has_material(model.mesh.material_id))
+    {
+        scene.materials.push(Material::default());
+    }
     for model in &models {
         let m = &model.mesh;
         let material = match m.material_id {
-            Some(id) if id < obj_materials.len() => id as u32,
-            _ => {
-                uses_default = true;
-                default_material
-            }
+            Some(id) if has_material(Some(id)) => id as u32,
+            _ => default_material,
         };
         let prim = Primitive {
             positions: m
@@ -198,9 +203,6 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             }
             None => scene.mesh.append(&prim, Mat4::IDENTITY, &model.name),
         }
-    }
-    if uses_default {
-        scene.materials.push(Material::default());
     }
     Ok(scene)
 }
@@ -444,7 +446,8 @@ mod tests {
 
     /// `map_Ke` (white on the left half, black on the right) makes the triangle over the
     /// left half an emitter of `Ke` and the one over the right half no light; a material
-    /// with `map_Ke` and no `Ke` emits nothing.
+    /// with `map_Ke` and no `Ke` emits nothing; a face without a material keeps the default
+    /// one, which is added before the emitters' copies.
     #[test]
     fn an_emissive_texture_lights_the_triangles_over_its_lit_texels() {
         let d = dir("map-ke");
@@ -455,18 +458,29 @@ mod tests {
         std::fs::write(d.join("m.mtl"), mtl).unwrap();
         let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n\
                    vt 0.1 0\nvt 0.4 0\nvt 0.1 1\nvt 0.6 0\nvt 0.9 0\nvt 0.9 1\n\
+                   f 1/1 2/2 3/3\n\
                    usemtl lamp\nf 1/1 2/2 3/3\nf 1/4 2/5 3/6\nusemtl dark\nf 1/1 2/2 3/3\n";
         std::fs::write(d.join("s.obj"), obj).unwrap();
         let scene = load(&d.join("s.obj")).unwrap();
-        let emission = |t: usize| scene.material_of(t).emission;
-        assert_eq!(scene.mesh.triangles.len(), 3);
+        assert_eq!(scene.mesh.triangles.len(), 4);
+        // Per material name, the emission of its triangles in order.
+        let of = |name: &str| -> Vec<Vec3> {
+            (0..4)
+                .map(|t| scene.material_of(t))
+                .filter(|m| m.name == name)
+                .map(|m| m.emission)
+                .collect()
+        };
+        let lamp = of("lamp");
+        assert_eq!(lamp.len(), 2);
         assert!(
-            (emission(0) - Vec3::splat(3.0)).abs().max_element() < 1e-3,
-            "{}",
-            emission(0)
+            (lamp[0] - Vec3::splat(3.0)).abs().max_element() < 1e-3,
+            "{lamp:?}"
         );
-        assert_eq!(emission(1), Vec3::ZERO);
-        assert_eq!(emission(2), Vec3::ZERO);
+        assert_eq!(lamp[1], Vec3::ZERO);
+        assert_eq!(of("dark"), vec![Vec3::ZERO]);
+        // The face before any `usemtl` keeps the default material, not an emitter's copy.
+        assert_eq!(of("default"), vec![Vec3::ZERO]);
         let _ = std::fs::remove_dir_all(&d);
     }
 
