@@ -318,6 +318,11 @@ fn print_table(
     convergence: &[(String, Option<f64>)],
     threads: usize,
 ) {
+    // The scene column as wide as its longest name.
+    let names = points.iter().map(|p| p.scene.as_str());
+    let sw = crate::bench_quality::scene_column(
+        names.chain(convergence.iter().map(|(s, _)| s.as_str())),
+    );
     println!(
         "Indirect light against a converged reference ({}), {}x{}, {threads} threads",
         crate::bench_reference::describe(args),
@@ -325,12 +330,12 @@ fn print_table(
         args.size.1
     );
     println!(
-        "{:<14} {:<16} {:>9} {:>9} {:>9} {:>7} {:>9}",
+        "{:<sw$} {:<16} {:>9} {:>9} {:>9} {:>7} {:>9}",
         "scene", "method", "VPLs", "ms", "rel_rmse", "FLIP", "rel_bias"
     );
     for p in points {
         println!(
-            "{:<14} {:<16} {:>9} {:>9.1} {:>9.4} {:>7.4} {:>+9.4}",
+            "{:<sw$} {:<16} {:>9} {:>9.1} {:>9.4} {:>7.4} {:>+9.4}",
             p.scene,
             p.series,
             vpls_of(p),
@@ -346,7 +351,7 @@ fn print_table(
         WIN_MARGIN * 100.0
     );
     println!(
-        "{:<14} {:>7} {:>22} {:>22} {:>6} {:>22} {:>22} {:>6}  lgh wins",
+        "{:<sw$} {:>7} {:>22} {:>22} {:>6} {:>22} {:>22} {:>6}  lgh wins",
         "scene",
         "budget",
         "lgh FLIP (VPLs)",
@@ -378,7 +383,7 @@ fn print_table(
             r.slc.as_ref().map(|p| p.rel_rmse),
         );
         println!(
-            "{:<14} {:>5.0}ms {:>22} {:>22} {:>6} {:>22} {:>22} {:>6}  {}",
+            "{:<sw$} {:>5.0}ms {:>22} {:>22} {:>6} {:>22} {:>22} {:>6}  {}",
             r.scene,
             r.budget_ms,
             cell(
@@ -420,14 +425,14 @@ fn print_table(
     for (scene, half) in convergence {
         match half {
             Some(f) => println!(
-                "{scene:<14} {f:.4}  {}",
+                "{scene:<sw$} {f:.4}  {}",
                 if *f < smallest / 10.0 {
                     "converged"
                 } else {
                     "NOT converged: more --reference-frames"
                 }
             ),
-            None => println!("{scene:<14} unknown (no half file beside the reference)"),
+            None => println!("{scene:<sw$} unknown (no half file beside the reference)"),
         }
     }
     println!("plot: {}", args.plot.display());

@@ -510,13 +510,14 @@ pub fn run(args: &QualityBenchArgs) -> Result<()> {
         args.accumulate_size.1,
         args.accumulate_vpls
     );
+    let sw = scene_column(points.iter().map(|p| p.scene.as_str()));
     println!(
-        "{:<14} {:<18} {:<9} {:>9} {:>9} {:>7} {:>9}",
+        "{:<sw$} {:<18} {:<9} {:>9} {:>9} {:>7} {:>9}",
         "scene", "method", "setting", "ms", "rel_rmse", "FLIP", "rel_bias"
     );
     for p in &points {
         println!(
-            "{:<14} {:<18} {:<9} {:>9.1} {:>9.4} {:>7.4} {:>+9.4}",
+            "{:<sw$} {:<18} {:<9} {:>9.1} {:>9.4} {:>7.4} {:>+9.4}",
             p.scene, p.series, p.setting, p.ms, p.rel_rmse, p.flip, p.rel_bias
         );
     }
@@ -527,12 +528,12 @@ pub fn run(args: &QualityBenchArgs) -> Result<()> {
         lgh_render::methods::slc::DEFAULT_ERROR_BOUND
     );
     println!(
-        "{:<14} {:>9} {:>9} {:>7} {:>9} {:>9} {:>7} {:>14} {:>7}  lgh wins",
+        "{:<sw$} {:>9} {:>9} {:>7} {:>9} {:>9} {:>7} {:>14} {:>7}  lgh wins",
         "scene", "lgh FLIP", "bias", "ms", "slc FLIP", "bias", "ms", "slc equal time", "ms"
     );
     for row in summary(&points) {
         println!(
-            "{:<14} {:>9.4} {:>+9.4} {:>7.0} {:>9.4} {:>+9.4} {:>7.0} {:>14.4} {:>7.0}  {}",
+            "{:<sw$} {:>9.4} {:>+9.4} {:>7.0} {:>9.4} {:>+9.4} {:>7.0} {:>14.4} {:>7.0}  {}",
             row.scene,
             row.lgh.flip,
             row.lgh.rel_bias,
@@ -547,6 +548,11 @@ pub fn run(args: &QualityBenchArgs) -> Result<()> {
     }
     println!("plot: {}", args.plot.display());
     Ok(())
+}
+
+/// The width of a table's scene column: its longest name, at least 14 characters.
+pub(crate) fn scene_column<'a>(names: impl Iterator<Item = &'a str>) -> usize {
+    names.map(|s| s.chars().count()).fold(14, usize::max)
 }
 
 /// lgh against slc on one scene: both at their defaults, and slc at equal time.

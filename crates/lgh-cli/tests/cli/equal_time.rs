@@ -252,3 +252,44 @@ fn the_reference_renders_on_the_gpu_as_on_the_cpu() {
         "GPU reference against CPU: rel_rmse {rel_rmse}"
     );
 }
+
+/// The text tables keep their columns under a scene name longer than the default column
+/// (`cornell-moving-light`, 20 characters): each row's budget ends where the header's does.
+#[test]
+fn the_text_table_fits_long_scene_names() {
+    let d = temp_dir("equal-time-text");
+    let out = lgh(&[
+        "bench",
+        "quality",
+        "--equal-time",
+        "builtin:cornell-moving-light",
+        "--size",
+        "32x18",
+        "--sweep",
+        "100",
+        "--budgets",
+        "10000",
+        "--reference-frames",
+        "2",
+        "--reference-vpls",
+        "300",
+        "--runs",
+        "1",
+        "--reference-dir",
+        s(&d.join("refs")),
+        "--plot",
+        s(&d.join("et.png")),
+    ]);
+    assert_ok(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    let header = text.lines().find(|l| l.ends_with("lgh wins")).unwrap();
+    let end = header.find("budget").unwrap() + "budget".len();
+    let rows: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("cornell-moving-light ") && l.contains("ms "))
+        .collect();
+    assert!(!rows.is_empty(), "{text}");
+    for row in rows {
+        assert_eq!(row.get(end - 2..end), Some("ms"), "{header}\n{row}");
+    }
+}
