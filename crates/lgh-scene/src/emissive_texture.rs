@@ -9,7 +9,7 @@
 //! light.
 //!
 //! Triangles with the same mean share a material, a copy of the file's with that emission
-//! (means are rounded to 1/4096 of the texel range first, so that nearly equal ones meet).
+//! (means are cut to 15 bits of mantissa first, so that nearly equal ones meet).
 //! What the camera sees of an emitter is that per-triangle mean too: the texture's detail
 //! within a triangle is lost.
 
@@ -24,8 +24,9 @@ use crate::{Material, Scene};
 /// Points per triangle at which the texture's mean is taken, at most and at least.
 const MAX_POINTS: usize = 256;
 const MIN_POINTS: usize = 64;
-/// The rounding of means before triangles share a material, in units of the texel range.
-const MEAN_STEPS: f32 = 4096.0;
+/// The bits of a mean kept before triangles share a material: 15 of the mantissa's 23
+/// (a relative step of 3e-5, so that a dim mean of a strong factor keeps its light).
+const MEAN_BITS: u32 = !0xff;
 
 /// A material's emissive texture: the scene's texture, its coordinates and wrap.
 #[derive(Clone, Copy, Debug)]
@@ -112,18 +113,24 @@ impl Emitters {
 
     /// The material of `material` whose emission is its own times `mean` (rounded).
     fn material_for(&mut self, scene: &mut Scene, material: u32, mean: Vec3) -> u32 {
-        let rounded = (mean.clamp(Vec3::ZERO, Vec3::splat(1e6)) * MEAN_STEPS).round();
-        let key = (material, rounded.to_array().map(|c| c as u32));
-        *self.made.entry(key).or_insert_with(|| {
-            let base = &scene.materials[material as usize];
-            let made = Material {
-                name: base.name.clone(),
-                emission: base.emission * rounded / MEAN_STEPS,
-                ..base.clone()
-            };
-            scene.materials.push(made);
-            scene.materials.len() as u32 - 1
-        })
+        let bits = mean
+            .max(Vec3::ZERO)
+            .to_array()
+            .map(|c| c.to_bits() & MEAN_BITS);
+        if let Some(&made) = self.made.get(&(material, bits)) {
+            return made;
+        }
+        let Some(base) = scene.materials.get(material as usize) else {
+            return material;
+        };
+        let made = Material {
+            emission: base.emission * Vec3::from_array(bits.map(f32::from_bits)),
+            ..base.clone()
+        };
+        scene.materials.push(made);
+        let index = scene.materials.len() as u32 - 1;
+        self.made.insert((material, bits), index);
+        index
     }
 }
 
