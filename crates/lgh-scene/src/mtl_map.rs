@@ -47,7 +47,7 @@ impl TextureMap<'_> {
 /// what follows is the file name, as a file whose name starts with `-` needs.
 pub(crate) fn parse(arguments: &str) -> TextureMap<'_> {
     let mut map = TextureMap {
-        file: arguments.trim(),
+        file: "",
         wrap: Wrap::Repeat,
         offset: Vec2::ZERO,
         scale: Vec2::ONE,
@@ -98,6 +98,7 @@ pub(crate) fn parse(arguments: &str) -> TextureMap<'_> {
         }
         rest = after.trim_start();
     }
+    // The file name: what the options leave.
     map.file = rest.trim();
     map
 }
