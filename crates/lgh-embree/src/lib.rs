@@ -17,6 +17,8 @@
 //! - the struct layouts are those of Embree's default configuration, which the build script
 //!   checks in the library's `rtcore_config.h` before linking, and compile-time size
 //!   assertions check the declarations;
+//! - a scene made with a [`HitFilter`] owns it, boxed at a fixed address that Embree holds
+//!   as the geometry's user data, and Embree calls it only during queries on that scene;
 //! - inputs Embree does not check (vertex indices, counts that must fit 32 bits, non-finite
 //!   vertices) are checked here before any call.
 //!
@@ -39,6 +41,12 @@ pub use scene::Scene;
 mod stub;
 #[cfg(not(embree))]
 pub use stub::Scene;
+
+/// Which hits count, asked of every candidate hit on a scene made with
+/// [`Scene::with_filter`]: the triangle's index and the hit's barycentrics (u, v) (the
+/// weights of its second and third corners); false makes the ray go on as if the triangle
+/// were not there (alpha cut-outs). It must not panic (it runs inside Embree's traversal).
+pub type HitFilter = std::sync::Arc<dyn Fn(u32, [f32; 2]) -> bool + Send + Sync>;
 
 /// True if this build links Embree (else every [`Scene::new`] fails with
 /// [`Error::NotBuilt`]).

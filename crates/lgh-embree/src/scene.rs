@@ -4,7 +4,7 @@ use std::ffi::c_uint;
 use std::sync::OnceLock;
 
 use crate::sys;
-use crate::{BuildQuality, Error, Hit, Ray};
+use crate::{BuildQuality, Error, Hit, HitFilter, Ray};
 
 /// Rays handed to Embree per stream call: 64 rays are 3 KB (5 KB with hits) on the stack,
 /// initialised per call.
@@ -72,6 +72,9 @@ pub struct Scene {
     handle: sys::RtcScene,
     triangles: usize,
     streams: bool,
+    /// The filter Embree calls through the geometry's user data: boxed, so that its address
+    /// stays fixed, and dropped after the scene is released (fields drop after `drop`).
+    filter: Option<Box<HitFilter>>,
 }
 
 // SAFETY: the scene is committed in `new` and never modified; Embree documents that
@@ -157,6 +160,21 @@ impl Scene {
         triangles: &[[u32; 3]],
         quality: BuildQuality,
     ) -> Result<Self, Error> {
+        Self::with_filter(vertices, triangles, quality, None)
+    }
+
+    /// [`Scene::new`] with a filter that every candidate hit of every query must pass
+    /// (Embree's intersection and occlusion filter functions, which see hits in any order
+    /// and as many as the traversal meets).
+    ///
+    /// # Errors
+    /// As [`Scene::new`].
+    pub fn with_filter(
+        vertices: &[[f32; 3]],
+        triangles: &[[u32; 3]],
+        quality: BuildQuality,
+        filter: Option<HitFilter>,
+    ) -> Result<Self, Error> {
         crate::check_mesh(vertices, triangles)?;
         let dev = device()?;
         dev.error(); // clear anything left on this thread
@@ -170,6 +188,7 @@ impl Scene {
             handle,
             triangles: triangles.len(),
             streams: dev.1,
+            filter: filter.map(Box::new),
         };
         // SAFETY: a live scene not yet committed, owned by this thread; codes from the header.
         unsafe {
@@ -220,6 +239,18 @@ impl Scene {
             unsafe {
                 std::ptr::copy_nonoverlapping(vertices.as_ptr(), vb, vertices.len());
                 std::ptr::copy_nonoverlapping(triangles.as_ptr(), ib, triangles.len());
+            }
+            if let Some(f) = &scene.filter {
+                let user = std::ptr::from_ref::<HitFilter>(f).cast_mut().cast();
+                // SAFETY: a live geometry not yet committed; `user` points at the boxed
+                // filter the scene owns, which lives as long as the scene (it is dropped
+                // after the scene is released) and is only read, from any thread (it is
+                // Sync); `filter_hits` reads it as that type.
+                unsafe {
+                    sys::rtcSetGeometryUserData(geom.0, user);
+                    sys::rtcSetGeometryIntersectFilterFunction(geom.0, Some(filter_hits));
+                    sys::rtcSetGeometryOccludedFilterFunction(geom.0, Some(filter_hits));
+                }
             }
             // SAFETY: a live geometry with both buffers set, attached to a live uncommitted
             // scene; the scene takes a reference of its own, so the guard's release is fine.
@@ -349,6 +380,35 @@ impl Scene {
     }
 }
 
+/// Embree's filter function of a scene with a [`HitFilter`]: clears `valid` of every
+/// candidate hit the filter refuses, so that the traversal goes on past it.
+unsafe extern "C" fn filter_hits(args: *const sys::RtcFilterFunctionNArguments) {
+    // SAFETY: Embree passes a valid arguments record that lives for the call.
+    let args = unsafe { &*args };
+    // SAFETY: the user data is the boxed filter of the scene being queried
+    // (`Scene::with_filter` set it; the scene outlives its queries).
+    let filter = unsafe { &*args.geometry_user_ptr.cast::<HitFilter>() };
+    let n = args.n as usize;
+    let hit = args.hit.cast::<f32>();
+    for i in 0..n {
+        // SAFETY: `valid` holds N ints and `hit` N lanes of each of RTCHitN's fields
+        // (structure of arrays: u at float 3N + i, v at 4N + i, primID at word 5N + i, the
+        // header's RTCHitN_u, RTCHitN_v, RTCHitN_primID); the lanes are only read here, and
+        // `valid` of lane i is written by this call alone.
+        unsafe {
+            let valid = args.valid.add(i);
+            if *valid == 0 {
+                continue;
+            }
+            let (u, v) = (*hit.add(3 * n + i), *hit.add(4 * n + i));
+            let prim = *hit.add(5 * n + i).cast::<u32>();
+            if !filter(prim, [u, v]) {
+                *valid = 0;
+            }
+        }
+    }
+}
+
 /// Streams `rays` through `trace` 64 at a time: the rays Embree may see are made into
 /// records (`record`) and packed, `trace` runs over the packed records, and each ray's
 /// answer is read from its record (`answer`); the others get `miss`.
@@ -441,6 +501,61 @@ mod tests {
             .collect();
         for coherent in [false, true] {
             let mut occ = vec![true; rays.len()];
+            s.occluded_many(&rays, coherent, &mut occ);
+            let mut hits = vec![None; rays.len()];
+            s.intersect_many(&rays, coherent, &mut hits);
+            for (i, r) in rays.iter().enumerate() {
+                assert_eq!(occ[i], s.occluded(r), "ray {i}");
+                assert_eq!(hits[i], s.intersect(r), "ray {i}");
+            }
+        }
+    }
+
+    /// A filter that refuses the hits of triangle 0 where u > 0.25: rays there pass
+    /// through to a second square behind (z = 2), singly and in streams, coherent or not,
+    /// for closest hits and occlusion; rays elsewhere stop at the first square.
+    #[test]
+    fn a_filter_lets_rays_through_the_hits_it_refuses() {
+        let v = [
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [1.0, 1.0, 1.0],
+            [0.0, 1.0, 1.0],
+            [0.0, 0.0, 2.0],
+            [1.0, 0.0, 2.0],
+            [1.0, 1.0, 2.0],
+            [0.0, 1.0, 2.0],
+        ];
+        let tris = [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+        let filter: HitFilter = std::sync::Arc::new(|t, [u, _]| t != 0 || u <= 0.25);
+        let s = Scene::with_filter(&v, &tris, BuildQuality::High, Some(filter)).expect("builds");
+        let mut rays = Vec::new();
+        for i in 0..400 {
+            let (x, y) = (
+                (i % 20) as f32 / 20.0 + 0.0213,
+                (i / 20) as f32 / 20.0 + 0.0171,
+            );
+            rays.push(ray(x, y, 1.5 + (i % 2) as f32));
+        }
+        for (i, r) in rays.iter().enumerate() {
+            let (x, y) = (r.origin[0], r.origin[1]);
+            // Triangle 0 holds x > y; its u at (x, y) is x - y.
+            let through = x > y && x - y > 0.25;
+            let h = s.intersect(r);
+            let want_t = if through { 2.0 } else { 1.0 };
+            let got_t = h.map(|h| h.t);
+            if want_t < r.t_max {
+                assert!(
+                    (got_t.unwrap_or(0.0) - want_t).abs() < 1e-5,
+                    "ray {i}: {h:?}"
+                );
+            } else {
+                assert!(h.is_none(), "ray {i}: {h:?}");
+            }
+            assert_eq!(s.occluded(r), want_t < r.t_max, "ray {i}");
+        }
+        for coherent in [false, true] {
+            let mut occ = vec![false; rays.len()];
             s.occluded_many(&rays, coherent, &mut occ);
             let mut hits = vec![None; rays.len()];
             s.intersect_many(&rays, coherent, &mut hits);

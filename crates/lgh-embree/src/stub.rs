@@ -1,6 +1,6 @@
 //! The scene of a build without Embree: it cannot be made.
 
-use crate::{BuildQuality, Error, Hit, Ray};
+use crate::{BuildQuality, Error, Hit, HitFilter, Ray};
 
 /// A committed triangle scene (this build has no Embree: [`Scene::new`] always fails).
 #[derive(Debug)]
@@ -20,6 +20,19 @@ impl Scene {
     ) -> Result<Self, Error> {
         crate::check_mesh(vertices, triangles)?;
         Err(Error::NotBuilt)
+    }
+
+    /// Fails with [`Error::NotBuilt`], as [`Scene::new`].
+    ///
+    /// # Errors
+    /// Always.
+    pub fn with_filter(
+        vertices: &[[f32; 3]],
+        triangles: &[[u32; 3]],
+        quality: BuildQuality,
+        _filter: Option<HitFilter>,
+    ) -> Result<Self, Error> {
+        Self::new(vertices, triangles, quality)
     }
 
     /// Never called: no scene exists.

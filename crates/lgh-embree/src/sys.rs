@@ -111,6 +111,28 @@ impl RtcIntersectContext {
     }
 }
 
+/// `struct RTCFilterFunctionNArguments`: N candidate hits, structure of arrays.
+#[repr(C)]
+#[derive(Debug)]
+pub struct RtcFilterFunctionNArguments {
+    /// N ints: -1 for a hit to be filtered, 0 for an inactive lane; set 0 to reject.
+    pub valid: *mut c_int,
+    /// The geometry's user data (`rtcSetGeometryUserData`).
+    pub geometry_user_ptr: *mut c_void,
+    /// The query's context.
+    pub context: *mut RtcIntersectContext,
+    /// `RTCRayN`: N rays, structure of arrays.
+    pub ray: *mut c_void,
+    /// `RTCHitN`: N hits, structure of arrays (`RTCHitN_u` at float 3N + i, `RTCHitN_v` at
+    /// 4N + i, `RTCHitN_primID` at word 5N + i).
+    pub hit: *mut c_void,
+    /// N.
+    pub n: c_uint,
+}
+
+/// `RTCFilterFunctionN`.
+pub type RtcFilterFunctionN = unsafe extern "C" fn(args: *const RtcFilterFunctionNArguments);
+
 unsafe extern "C" {
     pub fn rtcNewDevice(config: *const c_char) -> RtcDevice;
     pub fn rtcGetDeviceError(device: RtcDevice) -> c_int;
@@ -135,6 +157,15 @@ unsafe extern "C" {
         item_count: usize,
     ) -> *mut c_void;
     pub fn rtcCommitGeometry(geometry: RtcGeometry);
+    pub fn rtcSetGeometryUserData(geometry: RtcGeometry, ptr: *mut c_void);
+    pub fn rtcSetGeometryIntersectFilterFunction(
+        geometry: RtcGeometry,
+        filter: Option<RtcFilterFunctionN>,
+    );
+    pub fn rtcSetGeometryOccludedFilterFunction(
+        geometry: RtcGeometry,
+        filter: Option<RtcFilterFunctionN>,
+    );
 
     pub fn rtcIntersect1(
         scene: RtcScene,
@@ -164,3 +195,4 @@ const _: () = assert!(std::mem::size_of::<RtcRay>() == 48);
 const _: () = assert!(std::mem::size_of::<RtcHit>() == 32);
 const _: () = assert!(std::mem::size_of::<RtcRayHit>() == 80);
 const _: () = assert!(std::mem::align_of::<RtcRayHit>() == 16);
+const _: () = assert!(std::mem::size_of::<RtcFilterFunctionNArguments>() == 48);

@@ -173,7 +173,11 @@ impl GpuContext {
         {
             return Ok(Arc::clone(scene));
         }
-        let scene = Arc::new(GpuScene::new(self, &world.scene.mesh)?);
+        let scene = Arc::new(GpuScene::new(
+            self,
+            &world.scene.mesh,
+            world.cutouts.as_deref(),
+        )?);
         *slot = Some((id, Arc::clone(&scene)));
         Ok(scene)
     }

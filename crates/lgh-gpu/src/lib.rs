@@ -24,6 +24,7 @@
 
 pub mod batch;
 mod context;
+mod cutouts;
 pub mod gbuffer;
 pub mod grid;
 pub mod interleave;

@@ -32,7 +32,8 @@ pub struct GpuNode {
 pub struct GpuScene {
     /// BVH nodes (root first).
     pub nodes: wgpu::Buffer,
-    /// Triangles in leaf order, three `vec4` corners each.
+    /// Triangles in leaf order, three `vec4` corners each, then their alpha cut-outs
+    /// (`cutouts.rs`).
     pub tris: wgpu::Buffer,
     /// Number of triangles.
     pub triangles: usize,
@@ -48,17 +49,21 @@ pub struct GpuScene {
 pub struct FlatBvh {
     /// The nodes, root first.
     pub nodes: Vec<GpuNode>,
-    /// The triangles in leaf order, three corners each (w: 0).
+    /// The triangles in leaf order, three corners each (w: 0, or the first corner's the slot
+    /// of its cut-out's record), then the cut-outs' records (`cutouts.rs`).
     pub tris: Vec<Vec4>,
     /// The mesh's index of each triangle in leaf order.
     pub order: Vec<u32>,
 }
 
-/// The flattened BVH and triangles of `mesh`.
+/// The flattened BVH and triangles of `mesh`, with the alpha cut-outs of its triangles.
 ///
 /// # Errors
 /// The BVH is deeper than the shader's stack ([`MAX_DEPTH`]).
-pub fn flatten(mesh: &lgh_scene::Mesh) -> Result<FlatBvh, GpuError> {
+pub fn flatten(
+    mesh: &lgh_scene::Mesh,
+    cutouts: Option<&lgh_scene::Cutouts>,
+) -> Result<FlatBvh, GpuError> {
     if mesh.is_empty() {
         return Ok(FlatBvh::default());
     }
@@ -84,11 +89,14 @@ pub fn flatten(mesh: &lgh_scene::Mesh) -> Result<FlatBvh, GpuError> {
             "the scene's BVH is {depth} levels deep; the GPU traversal holds {MAX_DEPTH}"
         )));
     }
-    let tris = bvh
+    let mut tris = bvh
         .primitive_indices
         .iter()
         .flat_map(|&i| mesh.vertices(i as usize).map(|v| v.extend(0.0)))
         .collect();
+    if let Some(c) = cutouts {
+        crate::cutouts::append(&mut tris, &bvh.primitive_indices, c);
+    }
     Ok(FlatBvh {
         nodes,
         tris,
@@ -112,12 +120,17 @@ fn depth(nodes: &[GpuNode]) -> usize {
 }
 
 impl GpuScene {
-    /// Builds the BVH of `mesh` on the CPU and uploads it with the triangles.
+    /// Builds the BVH of `mesh` on the CPU and uploads it with the triangles and their
+    /// alpha cut-outs.
     ///
     /// # Errors
     /// The BVH is too deep, or a buffer exceeds the adapter's limits.
-    pub fn new(ctx: &GpuContext, mesh: &lgh_scene::Mesh) -> Result<Self, GpuError> {
-        let FlatBvh { nodes, tris, order } = flatten(mesh)?;
+    pub fn new(
+        ctx: &GpuContext,
+        mesh: &lgh_scene::Mesh,
+        cutouts: Option<&lgh_scene::Cutouts>,
+    ) -> Result<Self, GpuError> {
+        let FlatBvh { nodes, tris, order } = flatten(mesh, cutouts)?;
         Ok(Self {
             nodes: ctx.storage("bvh nodes", &nodes)?,
             tris: ctx.storage("triangles", &tris)?,

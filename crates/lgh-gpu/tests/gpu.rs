@@ -57,7 +57,7 @@ fn the_bvh_flattens_with_every_triangle() {
         .finish(std::path::Path::new("<built-in cornell>"))
         .expect("scene");
     let lgh_gpu::scene::FlatBvh { nodes, tris, .. } =
-        lgh_gpu::scene::flatten(&scene.mesh).expect("flattens");
+        lgh_gpu::scene::flatten(&scene.mesh, None).expect("flattens");
     assert_eq!(tris.len(), 3 * scene.mesh.len());
     assert!(!nodes.is_empty());
 }
@@ -185,7 +185,7 @@ fn the_flattened_bvh_answers_as_the_cpu_tracer() {
     for rel in SCENES {
         let w = world(rel);
         let lgh_gpu::scene::FlatBvh { nodes, tris, .. } =
-            lgh_gpu::scene::flatten(&w.scene.mesh).expect("flattens");
+            lgh_gpu::scene::flatten(&w.scene.mesh, w.cutouts.as_deref()).expect("flattens");
         let (lo, hi) = w.scene.mesh.bounds();
         let mut rng = lgh_core::rng::Rng::new(&[5]);
         let mut wrong = 0;
@@ -240,7 +240,8 @@ fn gpu_occlusion_agrees_with_the_cpu_tracer() {
                 })
             })
             .collect();
-        let scene = lgh_gpu::GpuScene::new(ctx, &w.scene.mesh).expect("upload");
+        let scene =
+            lgh_gpu::GpuScene::new(ctx, &w.scene.mesh, w.cutouts.as_deref()).expect("upload");
         let gpu = lgh_gpu::rays::occluded_between(ctx, &scene, &pairs, w.ray_epsilon).expect("gpu");
         let wrong: Vec<usize> = (0..pairs.len())
             .filter(|&k| {

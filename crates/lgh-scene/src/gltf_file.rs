@@ -4,7 +4,8 @@
 //! Read: triangle primitives of every node of the default scene with their node transforms;
 //! base colour factor x base colour texture; emissive factor x
 //! `KHR_materials_emissive_strength` x the emissive texture's mean over each triangle
-//! (`emissive_texture.rs`); the first perspective camera; `KHR_lights_punctual` point, spot
+//! (`emissive_texture.rs`); `alphaMode` MASK (and BLEND with a texture's alpha) as a
+//! cut-out ([`Cutout`]); the first perspective camera; `KHR_lights_punctual` point, spot
 //! and directional lights (colour x intensity taken as radiant intensity or irradiance). Not
 //! read: metallic-roughness, normal maps, skins, morph targets (the surfaces are diffuse).
 
@@ -18,7 +19,8 @@ use crate::gltf_uv::{UvMap, wrap};
 use crate::mesh::Primitive;
 use crate::obj::file_stem;
 use crate::texture::Wrap;
-use crate::{Camera, Light, Material, Scene, SceneError};
+use crate::{Camera, Cutout, Light, Material, Scene, SceneError};
+use gltf::material::AlphaMode;
 
 /// Loads a glTF or GLB file into a scene. Call [`Scene::finish`] (or use [`crate::load`])
 /// before rendering.
@@ -28,6 +30,30 @@ use crate::{Camera, Light, Material, Scene, SceneError};
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     crate::file_kind::regular_file(path)?;
     contain_panics(path, "glTF", || load_checked(path))
+}
+
+/// The cut-out of glTF material `m` (docs/design.md, "Alpha cut-outs"): MASK cuts at its
+/// `alphaCutoff` where the base colour's alpha (factor `a` x texture) is below it; BLEND
+/// with a texture of varying alpha is read as a cut-out at 0.5 (leaves drawn blended); a
+/// blended surface of uniform alpha (glass) stays opaque. `None` where nothing is cut.
+fn cutout_of(
+    m: &gltf::Material,
+    texture: Option<u32>,
+    wrap: [Wrap; 2],
+    a: f32,
+    textures: &[crate::Texture],
+) -> Option<Cutout> {
+    let textured = texture
+        .and_then(|t| textures.get(t as usize))
+        .is_some_and(crate::Texture::has_alpha);
+    let cutoff = match m.alpha_mode() {
+        AlphaMode::Opaque => return None,
+        AlphaMode::Mask => m.alpha_cutoff().unwrap_or(0.5),
+        AlphaMode::Blend if textured => 0.5,
+        AlphaMode::Blend => return None,
+    };
+    let cutoff = if cutoff.is_finite() { cutoff } else { 0.5 };
+    Cutout::new(texture, wrap, a, cutoff).needed(textures)
 }
 
 /// [`load`] of a file that exists.
@@ -48,19 +74,6 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
             ));
         }
     }
-    // Cut-outs (leaves, fences) and blended surfaces are opaque here: say so, once.
-    let masked: Vec<&str> = doc
-        .materials()
-        .filter(|m| m.alpha_mode() != gltf::material::AlphaMode::Opaque)
-        .map(|m| m.name().unwrap_or("unnamed"))
-        .collect();
-    if let Some(first) = masked.first() {
-        scene.report.warnings.push(format!(
-            "{} materials ('{first}'{}) are alpha-masked or blended; lgh renders them opaque",
-            masked.len(),
-            if masked.len() > 1 { ", ..." } else { "" }
-        ));
-    }
     let mut texture_of_image = Vec::with_capacity(textures.len());
     for t in textures {
         texture_of_image.push(t.map(|t| {
@@ -70,11 +83,13 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
     }
     // Per material, the texture coordinates its base colour reads, and its emissive texture.
     let mut uv_maps = Vec::with_capacity(doc.materials().len());
+    // Blended materials of uniform alpha (glass): opaque here, said once below.
+    let mut blended = Vec::new();
     let mut emissive_maps = Vec::with_capacity(doc.materials().len());
     for m in doc.materials() {
         emissive_maps.push(EmissiveMap::of(&m, &texture_of_image));
         let pbr = m.pbr_metallic_roughness();
-        let [r, g, b, _] = pbr.base_color_factor();
+        let [r, g, b, a] = pbr.base_color_factor();
         uv_maps.push(
             pbr.base_color_texture()
                 .map_or(UvMap::IDENTITY, |i| UvMap::of(&i)),
@@ -92,13 +107,27 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
             [sampler.wrap_s(), sampler.wrap_t()].map(wrap)
         });
         let strength = m.emissive_strength().unwrap_or(1.0);
+        let name = m.name().unwrap_or("unnamed");
+        let cutout = cutout_of(&m, albedo_texture, albedo_wrap, a, &scene.textures);
+        if m.alpha_mode() == AlphaMode::Blend && cutout.is_none() && a < 1.0 {
+            blended.push(name);
+        }
         scene.materials.push(Material {
-            name: m.name().unwrap_or("unnamed").to_string(),
+            name: name.to_string(),
             albedo: Vec3::new(r, g, b),
             albedo_texture,
             albedo_wrap,
             emission: Vec3::from_array(m.emissive_factor()) * strength,
+            cutout,
         });
+    }
+    if let Some(first) = blended.first() {
+        scene.report.warnings.push(format!(
+            "{} materials ('{first}'{}) are blended with a uniform alpha below 1 (glass); lgh \
+             renders them opaque",
+            blended.len(),
+            if blended.len() > 1 { ", ..." } else { "" }
+        ));
     }
     let default_material = scene.materials.len() as u32;
     scene.materials.push(Material::default());

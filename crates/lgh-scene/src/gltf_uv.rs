@@ -94,7 +94,8 @@ mod tests {
 
     /// A file whose base colour reads TEXCOORD_1 through a transform (scale 2, offset 0.25
     /// in u) loads with the transformed second set (v flipped as lgh's textures read it),
-    /// and with its sampler's wrap modes; its alpha mask is a warning.
+    /// and with its sampler's wrap modes; its alpha mask cuts nothing, since its texture is
+    /// missing and its factor's alpha is 1.
     #[test]
     fn a_file_loads_with_its_materials_set_and_transform() {
         let scene = load(&transformed_file(3)).unwrap();
@@ -103,9 +104,7 @@ mod tests {
         assert_eq!(uvs, vec![[0.25, 1.0], [1.25, 1.0], [0.25, 0.0]]);
         // The sampler's CLAMP_TO_EDGE in u and MIRRORED_REPEAT in v.
         assert_eq!(scene.materials[0].albedo_wrap, [Wrap::Clamp, Wrap::Mirror]);
-        // Its alpha mask is rendered opaque, with a warning.
-        let w = &scene.report.warnings;
-        assert!(w.iter().any(|w| w.contains("alpha-masked")), "{w:?}");
+        assert_eq!(scene.materials[0].cutout, None);
     }
 
     /// The second coordinate set shorter than the positions is refused with one line

@@ -6,7 +6,8 @@
 //! | --- | --- |
 //! | [`scene`] | [`Scene`]: one world-space triangle mesh, materials, textures, lights, camera |
 //! | [`mesh`] | [`Mesh`]: triangles, structure-of-arrays |
-//! | [`material`], [`texture`] | diffuse albedo (factor x texture) and emitted radiance |
+//! | [`material`], [`texture`] | diffuse albedo (factor x texture), emitted radiance, alpha cut-outs |
+//! | [`cutouts`] | [`Cutouts`]: the alpha test of every ray, per triangle, for the tracers |
 //! | [`light`] | point, spot and directional lights (emissive triangles come from materials) |
 //! | [`camera`] | a pinhole camera and its primary rays |
 //! | [`obj`], [`gltf_file`], [`scene_file`] | loaders: Wavefront OBJ/MTL, glTF 2.0, the TOML scene file |
@@ -23,6 +24,7 @@
 pub mod animation;
 pub mod camera;
 pub mod cornell;
+pub mod cutouts;
 mod emissive_texture;
 pub mod emitter_room;
 pub mod error;
@@ -42,9 +44,10 @@ pub mod texture;
 pub mod texture_file;
 
 pub use camera::Camera;
+pub use cutouts::Cutouts;
 pub use error::SceneError;
 pub use light::Light;
-pub use material::Material;
+pub use material::{Cutout, Material};
 pub use mesh::Mesh;
 pub use scene::MAX_COORDINATE;
 pub use scene::{Scene, SceneReport};

@@ -1,4 +1,4 @@
-//! Diffuse materials with optional emission.
+//! Diffuse materials with optional emission and alpha cut-outs.
 
 use glam::{Vec2, Vec3};
 
@@ -19,6 +19,74 @@ pub struct Material {
     pub albedo_wrap: [Wrap; 2],
     /// Emitted radiance (linear RGB, W / (sr m^2)); zero for non-emitters.
     pub emission: Vec3,
+    /// Where the surface is not there at all (leaves, fences), if anywhere.
+    pub cutout: Option<Cutout>,
+}
+
+/// An alpha cut-out: the surface exists where alpha = `factor` x the texture's alpha (1
+/// without a texture) is at least `cutoff`, and every ray passes through it elsewhere (glTF
+/// `alphaMode` MASK with its `alphaCutoff`; BLEND and OBJ's `map_d` at 0.5;
+/// docs/design.md, "Alpha cut-outs").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cutout {
+    /// Index into [`crate::Scene::textures`] of the texture whose alpha is read
+    /// ([`Texture::alpha_at`]), if any.
+    pub texture: Option<u32>,
+    /// How the texture reads beyond [0, 1].
+    pub wrap: [Wrap; 2],
+    /// The texture's coordinates from the mesh's (those of the albedo texture):
+    /// uv x `scale` + `offset` (an OBJ `map_d` with other `-s`/`-o` than its `map_Kd`).
+    pub scale: Vec2,
+    /// See `scale`.
+    pub offset: Vec2,
+    /// The constant factor of alpha.
+    pub factor: f32,
+    /// The least alpha that is surface.
+    pub cutoff: f32,
+}
+
+impl Cutout {
+    /// A cut-out reading `texture` (if any) at the mesh's coordinates with `wrap`.
+    #[must_use]
+    pub fn new(texture: Option<u32>, wrap: [Wrap; 2], factor: f32, cutoff: f32) -> Self {
+        Self {
+            texture,
+            wrap,
+            scale: Vec2::ONE,
+            offset: Vec2::ZERO,
+            factor,
+            cutoff,
+        }
+    }
+
+    /// The alpha at the mesh's texture coordinate `uv`.
+    #[must_use]
+    pub fn alpha(&self, textures: &[Texture], uv: Vec2) -> f32 {
+        let a = self
+            .texture
+            .and_then(|i| textures.get(i as usize))
+            .map_or(1.0, |t| {
+                t.alpha_at(uv * self.scale + self.offset, self.wrap)
+            });
+        self.factor * a
+    }
+
+    /// True if the surface is there at the mesh's texture coordinate `uv`.
+    #[must_use]
+    pub fn covers(&self, textures: &[Texture], uv: Vec2) -> bool {
+        self.alpha(textures, uv) >= self.cutoff
+    }
+
+    /// The cut-out, or `None` where it never cuts: alpha is never below `cutoff` (no texture
+    /// or one without alpha, and a factor at or above the cutoff).
+    #[must_use]
+    pub fn needed(self, textures: &[Texture]) -> Option<Self> {
+        let masked = self
+            .texture
+            .and_then(|i| textures.get(i as usize))
+            .is_some_and(Texture::has_alpha);
+        (masked || self.factor < self.cutoff).then_some(self)
+    }
 }
 
 impl Default for Material {
@@ -29,6 +97,7 @@ impl Default for Material {
             albedo_texture: None,
             albedo_wrap: [Wrap::Repeat; 2],
             emission: Vec3::ZERO,
+            cutout: None,
         }
     }
 }

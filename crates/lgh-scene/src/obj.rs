@@ -2,7 +2,8 @@
 //!
 //! Faces are triangulated; `Kd` is the albedo, `map_Kd` its texture (sRGB, relative to the
 //! MTL file; its options `-clamp`, `-o` and `-s` are read: `mtl_map.rs`), `Ke` the
-//! emitted radiance, times `map_Ke`'s mean over each triangle (`emissive_texture.rs`). A
+//! emitted radiance, times `map_Ke`'s mean over each triangle (`emissive_texture.rs`),
+//! `map_d` (its alpha, else its grey level, times `d`) a cut-out at 0.5 ([`Cutout`]). A
 //! missing MTL file or texture is a warning, not an error: the geometry still renders with
 //! default materials. What old exporters wrote and the parser does not read is mended, with
 //! a warning: files in ISO-8859-1 or UTF-16 (decoded first), Windows path separators,
@@ -22,7 +23,7 @@ use crate::mtl_map;
 use crate::text;
 use crate::texture::Wrap;
 use crate::texture_file::{TexelBudget, TextureError};
-use crate::{Material, Scene, SceneError};
+use crate::{Cutout, Material, Scene, SceneError, Texture};
 
 /// Loads an OBJ file (and the MTL files it names) into a scene without camera or punctual
 /// lights. Call [`Scene::finish`] (or use [`crate::load`]) before rendering.
@@ -84,23 +85,21 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             ));
         }
     };
-    let mut budget = TexelBudget::default();
-    let mut loaded = HashMap::new();
+    let mut files = TextureFiles::default();
     // Per material, the options of its `map_Kd` that move the texture coordinates.
     let mut maps = Vec::with_capacity(obj_materials.len());
     // Per material, its emissive texture and the options of its `map_Ke`.
     let mut emissive_maps = Vec::with_capacity(obj_materials.len());
     let mut emitters = Emitters::default();
-    // Cut-outs (`map_d`) and transparent surfaces (`d` below 1) are opaque here: say so, once.
+    // Transparent surfaces (`d` below 1 without `map_d`: glass) are opaque here: say so, once.
     let see_through: Vec<&str> = obj_materials
         .iter()
-        .filter(|m| m.dissolve_texture.is_some() || m.dissolve.is_some_and(|d| d < 1.0))
+        .filter(|m| m.dissolve_texture.is_none() && m.dissolve.is_some_and(|d| d < 1.0))
         .map(|m| m.name.as_str())
         .collect();
     if let Some(first) = see_through.first() {
         scene.report.warnings.push(format!(
-            "{} materials ('{first}'{}) have a cut-out (map_d) or are transparent (d < 1); \
-             lgh renders them opaque",
+            "{} materials ('{first}'{}) are transparent (d < 1, glass); lgh renders them opaque",
             see_through.len(),
             if see_through.len() > 1 { ", ..." } else { "" }
         ));
@@ -117,7 +116,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let map = m.diffuse_texture.as_deref().map(mtl_map::parse);
         let albedo_texture = match &map {
             Some(map) if !map.file.is_empty() => {
-                load_texture(&mut scene, &mut budget, &mut loaded, &beside(dir, map.file))?
+                files.colour(&mut scene, &beside(dir, map.file))?
             }
             _ => None,
         };
@@ -126,9 +125,16 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let emissive = match m.unknown_param.get("map_Ke").map(|s| mtl_map::parse(s)) {
             Some(map) if !map.file.is_empty() && emission.max_element() > 0.0 => {
                 let path = beside(dir, map.file);
-                load_texture(&mut scene, &mut budget, &mut loaded, &path)?
+                files
+                    .colour(&mut scene, &path)?
                     .map(|t| (EmissiveMap::new(t, map.wrap), map))
             }
+            _ => None,
+        };
+        let cutout = match m.dissolve_texture.as_deref().map(mtl_map::parse) {
+            Some(d) if !d.file.is_empty() => files
+                .mask(&mut scene, &beside(dir, d.file))?
+                .and_then(|t| map_d_cutout(t, &d, map.as_ref(), m.dissolve, &scene)),
             _ => None,
         };
         scene.materials.push(Material {
@@ -137,6 +143,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             albedo_texture,
             albedo_wrap: [map.as_ref().map_or(Wrap::Repeat, |m| m.wrap); 2],
             emission,
+            cutout,
         });
         maps.push(map.filter(|m| !m.keeps_coordinates()));
         emissive_maps.push(emissive);
@@ -328,19 +335,57 @@ fn beside(dir: &Path, name: impl AsRef<Path>) -> PathBuf {
     }
 }
 
-/// Loads an image file as an sRGB texture within `budget`, once per path however many
-/// materials name it; an image that cannot be read is a warning (the material colour is
-/// used), one over the budget an error.
-pub(crate) fn load_texture(
+/// The texture files an OBJ's materials read, each decoded once as a colour texture and
+/// once as a cut-out's mask, within one budget.
+#[derive(Debug, Default)]
+struct TextureFiles {
+    budget: TexelBudget,
+    colour: HashMap<PathBuf, u32>,
+    mask: HashMap<PathBuf, u32>,
+}
+
+impl TextureFiles {
+    /// The colour texture at `path` (`map_Kd`, `map_Ke`), added to `scene`; `None` with a
+    /// warning if it cannot be read; an error if it is over the budget.
+    fn colour(&mut self, scene: &mut Scene, path: &Path) -> Result<Option<u32>, SceneError> {
+        load_texture(
+            scene,
+            &mut self.budget,
+            &mut self.colour,
+            path,
+            TexelBudget::decode_file,
+        )
+    }
+
+    /// The mask at `path` (`map_d`): the colour texture of that file where it has alpha,
+    /// else the file read as a mask ([`TexelBudget::decode_mask_file`]).
+    fn mask(&mut self, scene: &mut Scene, path: &Path) -> Result<Option<u32>, SceneError> {
+        if let Some(&i) = self.colour.get(path)
+            && scene
+                .textures
+                .get(i as usize)
+                .is_some_and(Texture::has_alpha)
+        {
+            return Ok(Some(i));
+        }
+        let decode = TexelBudget::decode_mask_file;
+        load_texture(scene, &mut self.budget, &mut self.mask, path, decode)
+    }
+}
+
+/// The texture at `path`, decoded by `decode` the first time (`loaded` remembers it) and
+/// added to `scene`.
+fn load_texture(
     scene: &mut Scene,
     budget: &mut TexelBudget,
     loaded: &mut HashMap<PathBuf, u32>,
     path: &Path,
+    decode: fn(&mut TexelBudget, &Path) -> Result<Texture, TextureError>,
 ) -> Result<Option<u32>, SceneError> {
     if let Some(&i) = loaded.get(path) {
         return Ok(Some(i));
     }
-    match budget.decode_file(path) {
+    match decode(budget, path) {
         Ok(tex) => {
             scene.textures.push(tex);
             let i = scene.textures.len() as u32 - 1;
@@ -356,6 +401,28 @@ pub(crate) fn load_texture(
             Ok(None)
         }
     }
+}
+
+/// The cut-out of a material whose `map_d` statement `d` loaded as `texture`: alpha = `d`
+/// (the material's dissolve, default 1) x the mask, cut at 0.5, read at `map_d`'s own
+/// coordinates, which the mesh holds as `map_Kd`'s (`kd`) maps them. `None` where it cuts
+/// nothing; `map_Kd`'s mapping is undone only where its scale has no zero.
+fn map_d_cutout(
+    texture: u32,
+    d: &mtl_map::TextureMap,
+    kd: Option<&mtl_map::TextureMap>,
+    dissolve: Option<f32>,
+    scene: &Scene,
+) -> Option<Cutout> {
+    let factor = dissolve.filter(|d| d.is_finite()).unwrap_or(1.0);
+    let mut cut = Cutout::new(Some(texture), [d.wrap; 2], factor, 0.5);
+    // mesh uv = raw x s_k + o_k, so map_d's raw x s_d + o_d = uv x s + o.
+    let (s_k, o_k) = kd.map_or((Vec2::ONE, Vec2::ZERO), |k| (k.scale, k.offset));
+    if s_k.x != 0.0 && s_k.y != 0.0 {
+        cut.scale = d.scale / s_k;
+        cut.offset = d.offset - cut.scale * o_k;
+    }
+    cut.needed(&scene.textures)
 }
 
 /// The file name without extension, for scene names.
@@ -403,8 +470,9 @@ mod tests {
     }
 
     /// `map_Kd -clamp on -s 2 3 -o 0.5 0 t.png` loads t.png, clamped, and moves the
-    /// coordinates of that material's faces (uv * s + o) and of no other's; its `map_d` is
-    /// a warning.
+    /// coordinates of that material's faces (uv * s + o) and of no other's; its `map_d` of
+    /// the same (black, opaque) file is a second texture, read as a grey mask at its own
+    /// coordinates, which undo map_Kd's.
     #[test]
     fn texture_options_are_read_before_the_file_name() {
         let d = dir("map-options");
@@ -415,8 +483,14 @@ mod tests {
         let obj = format!("mtllib m.mtl\n{QUAD}usemtl a\nf 1/1 3/3 2/2\nusemtl b\nf 1/1 4/4 3/3\n");
         std::fs::write(d.join("s.obj"), obj).unwrap();
         let scene = load(&d.join("s.obj")).unwrap();
-        assert_eq!(scene.textures.len(), 1, "{:?}", scene.report.warnings);
+        assert_eq!(scene.textures.len(), 2, "{:?}", scene.report.warnings);
         let [a, b] = [&scene.materials[0], &scene.materials[1]];
+        let cut = a.cutout.expect("map_d cuts");
+        assert_eq!(cut.texture, Some(1));
+        assert_eq!((cut.factor, cut.cutoff), (1.0, 0.5));
+        assert!((cut.scale - Vec2::new(0.5, 1.0 / 3.0)).abs().max_element() < 1e-6);
+        assert!((cut.offset - Vec2::new(-0.25, 0.0)).abs().max_element() < 1e-6);
+        assert_eq!(b.cutout, None);
         assert_eq!(
             (a.albedo_texture, a.albedo_wrap),
             (Some(0), [Wrap::Clamp; 2])
@@ -435,12 +509,6 @@ mod tests {
         };
         assert!(uvs_of(0).contains(&Vec2::new(2.5, 3.0)), "{:?}", uvs_of(0));
         assert!(uvs_of(1).iter().all(|uv| uv.max_element() <= 1.0));
-        // Its cut-out is rendered opaque, with a warning naming the material.
-        let w = &scene.report.warnings;
-        assert!(
-            w.iter().any(|w| w.contains("cut-out") && w.contains("'a'")),
-            "{w:?}"
-        );
         let _ = std::fs::remove_dir_all(&d);
     }
 

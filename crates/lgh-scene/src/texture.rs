@@ -1,4 +1,4 @@
-//! Colour textures, stored as linear RGB.
+//! Colour textures, stored as linear RGB, with the alpha channel where a texel is not opaque.
 
 use glam::{Vec2, Vec3};
 
@@ -13,6 +13,9 @@ pub struct Texture {
     /// Row-major texels, top row first (the convention of image files and of glTF/OBJ `v = 0`
     /// at the top after flipping, see [`Texture::sample`]).
     pub texels: Vec<Vec3>,
+    /// The alpha channel, 8 bits a texel in the order of `texels` (a coverage, not sRGB
+    /// encoded); empty where every texel is opaque. Read by cut-outs ([`crate::Cutout`]).
+    pub alpha: Vec<u8>,
 }
 
 /// sRGB electro-optical transfer function: an encoded value in [0, 1] to linear.
@@ -72,8 +75,9 @@ impl Wrap {
 }
 
 impl Texture {
-    /// A texture from 8-bit sRGB-encoded RGB(A) bytes (`channels` = 3 or 4, alpha ignored).
-    /// Returns `None` if the buffer is too small or a dimension is zero.
+    /// A texture from 8-bit sRGB-encoded RGB(A) bytes (`channels` = 3 or 4; with 4 the alpha
+    /// is kept if a texel is not opaque). Returns `None` if the buffer is too small or a
+    /// dimension is zero.
     #[must_use]
     pub fn from_srgb8(width: u32, height: u32, channels: usize, bytes: &[u8]) -> Option<Self> {
         let n = width as usize * height as usize;
@@ -81,16 +85,26 @@ impl Texture {
             return None;
         }
         let lut: Vec<f32> = (0..256).map(|i| srgb_to_linear(i as f32 / 255.0)).collect();
-        let texels = bytes
-            .chunks_exact(channels)
-            .take(n)
+        let pixels = || bytes.chunks_exact(channels).take(n);
+        let texels = pixels()
             .map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
             .collect();
+        let mut alpha = Vec::new();
+        if channels >= 4 && pixels().any(|p| p[3] < 255) {
+            alpha = pixels().map(|p| p[3]).collect();
+        }
         Some(Self {
             width,
             height,
             texels,
+            alpha,
         })
+    }
+
+    /// True if some texel is not opaque.
+    #[must_use]
+    pub fn has_alpha(&self) -> bool {
+        !self.alpha.is_empty()
     }
 
     /// Bilinear lookup at texture coordinate `uv` (u right, v up as in OBJ and after the glTF
@@ -104,18 +118,47 @@ impl Texture {
     /// loader's flip of v (v' = 1 - v) commutes with every wrap, so glTF's modes apply to
     /// v' unchanged.
     #[must_use]
-    pub fn sample_wrapped(&self, uv: Vec2, [wu, wv]: [Wrap; 2]) -> Vec3 {
+    pub fn sample_wrapped(&self, uv: Vec2, wrap: [Wrap; 2]) -> Vec3 {
+        let c = self.bilinear(uv, wrap, |i| self.texels[i], Vec3::lerp);
+        if c.is_finite() { c } else { Vec3::ZERO }
+    }
+
+    /// The alpha at `uv` in [0, 1], bilinear as [`Texture::sample_wrapped`] reads colour; 1
+    /// for a texture without alpha.
+    #[must_use]
+    pub fn alpha_at(&self, uv: Vec2, wrap: [Wrap; 2]) -> f32 {
+        if self.alpha.is_empty() {
+            return 1.0;
+        }
+        let a = self.bilinear(
+            uv,
+            wrap,
+            |i| f32::from(self.alpha[i]),
+            |a, b, t| a + (b - a) * t,
+        );
+        if a.is_finite() { a / 255.0 } else { 1.0 }
+    }
+
+    /// The bilinear weighting of the four texels (row-major indices, read by `at`) around
+    /// `uv`, blended by `lerp`.
+    #[inline]
+    fn bilinear<T: Copy>(
+        &self,
+        uv: Vec2,
+        [wu, wv]: [Wrap; 2],
+        at: impl Fn(usize) -> T,
+        lerp: impl Fn(T, T, f32) -> T,
+    ) -> T {
         let (w, h) = (self.width as i64, self.height as i64);
         let x = wu.coordinate(uv.x) * w as f32 - 0.5;
         let y = (1.0 - wv.coordinate(uv.y)) * h as f32 - 0.5;
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
-        let at = |xi: i64, yi: i64| self.texels[wv.texel(yi, h) * w as usize + wu.texel(xi, w)];
+        let at = |xi: i64, yi: i64| at(wv.texel(yi, h) * w as usize + wu.texel(xi, w));
         let (x0, y0) = (x0 as i64, y0 as i64);
-        let top = at(x0, y0).lerp(at(x0 + 1, y0), fx);
-        let bottom = at(x0, y0 + 1).lerp(at(x0 + 1, y0 + 1), fx);
-        let c = top.lerp(bottom, fy);
-        if c.is_finite() { c } else { Vec3::ZERO }
+        let top = lerp(at(x0, y0), at(x0 + 1, y0), fx);
+        let bottom = lerp(at(x0, y0 + 1), at(x0 + 1, y0 + 1), fx);
+        lerp(top, bottom, fy)
     }
 }
 

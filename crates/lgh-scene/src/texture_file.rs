@@ -6,7 +6,7 @@
 use std::io::{BufRead, Cursor, Seek};
 use std::path::Path;
 
-use image::{ImageReader, Limits};
+use image::{DynamicImage, ImageReader, Limits};
 
 use crate::Texture;
 
@@ -52,8 +52,23 @@ impl Default for TexelBudget {
 }
 
 impl TexelBudget {
-    /// Decodes the image file at `path` as an sRGB texture.
+    /// Decodes the image file at `path` as an sRGB texture (with its alpha channel).
     pub(crate) fn decode_file(&mut self, path: &Path) -> Result<Texture, TextureError> {
+        self.decode_file_as(path, colour)
+    }
+
+    /// Decodes the image file at `path` as a cut-out's mask (an OBJ `map_d`): its alpha
+    /// channel if it has one, else its grey level, as 8-bit coverage.
+    pub(crate) fn decode_mask_file(&mut self, path: &Path) -> Result<Texture, TextureError> {
+        self.decode_file_as(path, mask)
+    }
+
+    /// Decodes the image file at `path`, made a texture by `convert`.
+    fn decode_file_as(
+        &mut self,
+        path: &Path,
+        convert: fn(DynamicImage) -> Option<Texture>,
+    ) -> Result<Texture, TextureError> {
         crate::file_kind::regular_file(path).map_err(|e| TextureError::Unreadable(e.message))?;
         let open = || -> Result<_, String> {
             ImageReader::open(path)
@@ -61,7 +76,7 @@ impl TexelBudget {
                 .with_guessed_format()
                 .map_err(|e| e.to_string())
         };
-        self.decode(open)
+        self.decode(open, convert)
     }
 
     /// Decodes an image held in memory (a glTF buffer view or data URI).
@@ -71,7 +86,7 @@ impl TexelBudget {
                 .with_guessed_format()
                 .map_err(|e| e.to_string())
         };
-        self.decode(open)
+        self.decode(open, colour)
     }
 
     /// Reads the size from the header of one reader, checks it, then decodes with a second
@@ -79,6 +94,7 @@ impl TexelBudget {
     fn decode<R: BufRead + Seek>(
         &mut self,
         open: impl Fn() -> Result<ImageReader<R>, String>,
+        convert: fn(DynamicImage) -> Option<Texture>,
     ) -> Result<Texture, TextureError> {
         let unreadable = TextureError::Unreadable;
         let (w, h) = open()
@@ -105,15 +121,33 @@ impl TexelBudget {
         // The widest decoded pixel: 4 channels of 32-bit float.
         limits.max_alloc = Some(texels * 16 + (1 << 20));
         reader.limits(limits);
-        let rgb = reader
-            .decode()
-            .map_err(|e| unreadable(e.to_string()))?
-            .to_rgb8();
-        let tex = Texture::from_srgb8(rgb.width(), rgb.height(), 3, rgb.as_raw())
-            .ok_or_else(|| unreadable("an empty image".into()))?;
+        let image = reader.decode().map_err(|e| unreadable(e.to_string()))?;
+        let tex = convert(image).ok_or_else(|| unreadable("an empty image".into()))?;
         self.left -= texels;
         Ok(tex)
     }
+}
+
+/// An image as an sRGB colour texture, with its alpha channel if it has one.
+fn colour(image: DynamicImage) -> Option<Texture> {
+    if image.color().has_alpha() {
+        let rgba = image.to_rgba8();
+        Texture::from_srgb8(rgba.width(), rgba.height(), 4, rgba.as_raw())
+    } else {
+        let rgb = image.to_rgb8();
+        Texture::from_srgb8(rgb.width(), rgb.height(), 3, rgb.as_raw())
+    }
+}
+
+/// An image as a mask: its alpha where it has an alpha channel, else its grey level, as the
+/// texture's alpha (8-bit coverage, not sRGB decoded), and as its colour.
+fn mask(image: DynamicImage) -> Option<Texture> {
+    if image.color().has_alpha() {
+        return colour(image);
+    }
+    let grey = image.to_luma8();
+    let rgba: Vec<u8> = grey.as_raw().iter().flat_map(|&l| [l, l, l, l]).collect();
+    Texture::from_srgb8(grey.width(), grey.height(), 4, &rgba)
 }
 
 #[cfg(test)]

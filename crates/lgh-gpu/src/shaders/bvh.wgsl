@@ -2,6 +2,12 @@
 // are nodes[first] and nodes[first + 1], a leaf holds `count` triangles from `first` in leaf
 // order) with the Moller-Trumbore triangle test: any hit (shadow rays) or the closest hit
 // (primary rays). Included by the kernels that trace rays.
+//
+// Alpha cut-outs (lgh_gpu::cutouts, lgh-scene's Cutouts::covers) live in the same buffer as
+// the triangles, after them: the w of a triangle's first corner holds, as bits, the index of
+// its record (0: opaque); a record is two vec4s (its corners' texture coordinates, then the
+// index of its cut-out), a cut-out two (width, height, wrap bits and the index of its first
+// texel word; factor, cutoff, whether it has a texture), the texels 8-bit alphas, 16 a vec4.
 
 struct Node {
     lo: vec3<f32>,
@@ -41,6 +47,54 @@ fn triangle_hit(t: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> vec3<f32> {
     return vec3<f32>(select(-1.0, tt, inside), u, v);
 }
 
+// A cut-out's alpha texel i (0..255) from the packed words at vec4 index `first`.
+fn alpha_texel(first: u32, i: u32) -> f32 {
+    let word = bitcast<u32>(tris[first + i / 16u][(i / 4u) % 4u]);
+    return f32((word >> (8u * (i % 4u))) & 0xffu);
+}
+
+// Cutouts::covers: true if triangle t (leaf order) is there at barycentrics (b1, b2).
+fn covers(t: u32, b1: f32, b2: f32) -> bool {
+    let r = bitcast<u32>(tris[3u * t].w);
+    if (r == 0u) {
+        return true;
+    }
+    let c01 = tris[r];
+    let c2 = tris[r + 1u];
+    let uv = c01.xy * (1.0 - b1 - b2) + c01.zw * b1 + c2.xy * b2;
+    let k = bitcast<u32>(c2.z);
+    let head = tris[k];
+    let consts = tris[k + 1u];
+    var alpha = 1.0;
+    if (consts.z != 0.0) {
+        // Texture::alpha_at: bilinear, v up.
+        let w = i32(bitcast<u32>(head.x));
+        let h = i32(bitcast<u32>(head.y));
+        let wrap = bitcast<u32>(head.z);
+        let first = bitcast<u32>(head.w);
+        let wu = wrap & 3u;
+        let wv = (wrap >> 2u) & 3u;
+        let x = wrap_coordinate(uv.x, wu) * f32(w) - 0.5;
+        let y = (1.0 - wrap_coordinate(uv.y, wv)) * f32(h) - 0.5;
+        let x0 = floor(x);
+        let y0 = floor(y);
+        let fx = x - x0;
+        let fy = y - y0;
+        let xa = wrap_texel(i32(x0), w, wu);
+        let xb = wrap_texel(i32(x0) + 1, w, wu);
+        let ya = wrap_texel(i32(y0), h, wv);
+        let yb = wrap_texel(i32(y0) + 1, h, wv);
+        let a00 = alpha_texel(first, u32(ya * w + xa));
+        let a01 = alpha_texel(first, u32(ya * w + xb));
+        let a10 = alpha_texel(first, u32(yb * w + xa));
+        let a11 = alpha_texel(first, u32(yb * w + xb));
+        let top = a00 + (a01 - a00) * fx;
+        let bottom = a10 + (a11 - a10) * fx;
+        alpha = (top + (bottom - top) * fy) / 255.0;
+    }
+    return consts.x * alpha >= consts.y;
+}
+
 const STACK: u32 = 48u;
 const NONE: u32 = 0xffffffffu;
 
@@ -75,7 +129,7 @@ fn trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any: bool) -> Hit {
         if (n.count > 0u) {
             for (var i = 0u; i < n.count; i++) {
                 let h = triangle_hit(n.first + i, o, d, best.t);
-                if (h.x > 0.0) {
+                if (h.x > 0.0 && covers(n.first + i, h.y, h.z)) {
                     best = Hit(h.x, n.first + i, h.y, h.z);
                     if (any) {
                         return best;

@@ -47,3 +47,31 @@ fn filter_guide(s: vec3<f32>, u: vec3<f32>) -> f32 {
 fn unshadowed_key(a: vec3<f32>) -> f32 {
     return log(max(luminance(a), 1e-20));
 }
+
+// Rust's f32::rem_euclid(x, m).
+fn rem_euclid(x: f32, m: f32) -> f32 {
+    let r = x % m;
+    return select(r, r + m, r < 0.0);
+}
+
+const WRAP_REPEAT: u32 = 0u;
+const WRAP_CLAMP: u32 = 1u;
+
+// lgh-scene's Wrap::coordinate: t brought into [0, 1].
+fn wrap_coordinate(t: f32, wrap: u32) -> f32 {
+    if (wrap == WRAP_REPEAT) {
+        return rem_euclid(t, 1.0);
+    }
+    if (wrap == WRAP_CLAMP) {
+        return clamp(t, 0.0, 1.0);
+    }
+    return 1.0 - abs(rem_euclid(t, 2.0) - 1.0);
+}
+
+// lgh-scene's Wrap::texel: the texel of index i of an axis of n.
+fn wrap_texel(i: i32, n: i32, wrap: u32) -> i32 {
+    if (wrap == WRAP_REPEAT) {
+        return ((i % n) + n) % n;
+    }
+    return clamp(i, 0, n - 1);
+}

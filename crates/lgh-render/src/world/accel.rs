@@ -11,6 +11,9 @@
 //!   through the stream calls. A still scene is built at high quality (spatial splits), a
 //!   mesh rebuilt every frame (moving objects) at low quality.
 //!
+//! Alpha cut-outs ([`Cutouts`]) are tested by both on every candidate hit, with the same
+//! barycentrics: obvhs in its intersection closure, Embree in its filter functions.
+//!
 //! Nothing outside this module sees which BVH is used.
 
 use std::time::Duration;
@@ -18,7 +21,9 @@ use std::time::Duration;
 use glam::{Vec2, Vec3, Vec3A};
 use obvhs::{BvhBuildParams, aabb::Aabb, cwbvh::CwBvh, ray::Ray, rt_triangle::RtTriangle};
 
-use lgh_scene::Mesh;
+use std::sync::Arc;
+
+use lgh_scene::{Cutouts, Mesh};
 
 /// A ray-triangle intersection.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -136,6 +141,7 @@ struct Obvhs {
     bvh: CwBvh,
     tris: Vec<RtTriangle>,
     ids: Vec<u32>,
+    cutouts: Option<Arc<Cutouts>>,
 }
 
 enum Backend {
@@ -148,6 +154,8 @@ enum Backend {
 pub struct Accel {
     backend: Backend,
     len: usize,
+    /// Triangles with a cut-out, for statistics.
+    cut: usize,
 }
 
 impl std::fmt::Debug for Accel {
@@ -155,6 +163,7 @@ impl std::fmt::Debug for Accel {
         f.debug_struct("Accel")
             .field("kind", &self.kind())
             .field("triangles", &self.len)
+            .field("cut_out", &self.cut)
             .finish()
     }
 }
@@ -199,6 +208,12 @@ const EDGE_SLACK: f32 = 1e-6;
 /// [`EDGE_SLACK`] outside a triangle count, which closes both kinds of crack.
 #[inline]
 fn closed_hit(tri: &RtTriangle, ray: &Ray) -> f32 {
+    closed_hit_uv(tri, ray).0
+}
+
+/// [`closed_hit`] with the hit's barycentrics (b1, b2).
+#[inline]
+fn closed_hit_uv(tri: &RtTriangle, ray: &Ray) -> (f32, Vec2) {
     let c = tri.v0 - ray.origin;
     let r = ray.direction.cross(c);
     let inv_det = 1.0 / tri.ng.dot(ray.direction);
@@ -208,10 +223,10 @@ fn closed_hit(tri: &RtTriangle, ray: &Ray) -> f32 {
     if inv_det != 0.0 && u >= -EDGE_SLACK && v >= -EDGE_SLACK && w >= -EDGE_SLACK {
         let t = tri.ng.dot(c) * inv_det;
         if t >= ray.tmin && t <= ray.tmax {
-            return t;
+            return (t, Vec2::new(u, v));
         }
     }
-    f32::INFINITY
+    (f32::INFINITY, Vec2::ZERO)
 }
 
 /// `dir` with every -0.0 made +0.0 (adding +0.0 does it): obvhs's traversal missed the
@@ -222,7 +237,7 @@ fn positive_zeros(dir: Vec3) -> Vec3 {
 }
 
 impl Obvhs {
-    fn build(mesh: &Mesh) -> Self {
+    fn build(mesh: &Mesh, cutouts: Option<Arc<Cutouts>>) -> Self {
         let boxes = padded_boxes(mesh);
         let bvh = obvhs::cwbvh::builder::build_cwbvh(
             &boxes,
@@ -237,35 +252,58 @@ impl Obvhs {
                 RtTriangle::new(a, b, c)
             })
             .collect();
-        Self { bvh, tris, ids }
+        Self {
+            bvh,
+            tris,
+            ids,
+            cutouts,
+        }
+    }
+
+    /// The distance to leaf triangle `id` along `ray`, or infinity, with its cut-out tested.
+    #[inline]
+    fn masked_hit(&self, cutouts: &Cutouts, ray: &Ray, id: usize) -> f32 {
+        let (t, b) = closed_hit_uv(&self.tris[id], ray);
+        if t.is_finite() && !cutouts.covers(self.ids[id], b) {
+            f32::INFINITY
+        } else {
+            t
+        }
     }
 
     #[inline]
     fn intersect(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
         let ray = Ray::new(origin.into(), positive_zeros(dir).into(), 0.0, t_max);
         let mut hit = obvhs::ray::RayHit::none();
-        if self
-            .bvh
-            .ray_traverse(ray, &mut hit, |r, id| closed_hit(&self.tris[id], r))
-        {
+        let found = match &self.cutouts {
+            None => self
+                .bvh
+                .ray_traverse(ray, &mut hit, |r, id| closed_hit(&self.tris[id], r)),
+            Some(c) => self
+                .bvh
+                .ray_traverse(ray, &mut hit, |r, id| self.masked_hit(c, r, id)),
+        };
+        found.then(|| {
             let id = hit.primitive_id as usize;
-            let bary = self.tris[id].compute_barycentric(&ray);
-            Some(Hit {
+            Hit {
                 t: hit.t,
                 triangle: self.ids[id],
-                bary,
-            })
-        } else {
-            None
-        }
+                bary: self.tris[id].compute_barycentric(&ray),
+            }
+        })
     }
 
     #[inline]
     fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
         let ray = Ray::new(origin.into(), positive_zeros(dir).into(), 0.0, t_max);
-        !self
-            .bvh
-            .ray_traverse_miss(ray, |r, id| closed_hit(&self.tris[id], r))
+        !match &self.cutouts {
+            None => self
+                .bvh
+                .ray_traverse_miss(ray, |r, id| closed_hit(&self.tris[id], r)),
+            Some(c) => self
+                .bvh
+                .ray_traverse_miss(ray, |r, id| self.masked_hit(c, r, id)),
+        }
     }
 }
 
@@ -294,7 +332,7 @@ impl Accel {
     #[must_use]
     pub fn build(mesh: &Mesh) -> Self {
         Self::build_with(mesh, AccelKind::default_kind(), BuildUse::Still)
-            .unwrap_or_else(|_| Self::obvhs(mesh))
+            .unwrap_or_else(|_| Self::obvhs(mesh, None))
     }
 
     /// Builds the BVH over every triangle of `mesh` with the backend `kind`, at the quality
@@ -303,37 +341,64 @@ impl Accel {
     /// # Errors
     /// Embree is not in this build, or refuses the mesh or fails.
     pub fn build_with(mesh: &Mesh, kind: AccelKind, usage: BuildUse) -> Result<Self, AccelError> {
-        match kind {
-            AccelKind::Obvhs => Ok(Self::obvhs(mesh)),
-            AccelKind::Embree => Self::embree(mesh, usage),
-        }
+        Self::build_cut(mesh, None, kind, usage)
     }
 
-    fn obvhs(mesh: &Mesh) -> Self {
+    /// [`Accel::build_with`] for a mesh whose triangles may have alpha cut-outs: every
+    /// query passes through a triangle where [`Cutouts::covers`] is false (`cutouts` must
+    /// be those of this mesh's triangles).
+    ///
+    /// # Errors
+    /// As [`Accel::build_with`].
+    pub fn build_cut(
+        mesh: &Mesh,
+        cutouts: Option<Arc<Cutouts>>,
+        kind: AccelKind,
+        usage: BuildUse,
+    ) -> Result<Self, AccelError> {
+        let cut = cutouts.as_ref().map_or(0, |c| c.len());
+        let mut accel = match kind {
+            AccelKind::Obvhs => Self::obvhs(mesh, cutouts),
+            AccelKind::Embree => Self::embree(mesh, cutouts, usage)?,
+        };
+        accel.cut = cut;
+        Ok(accel)
+    }
+
+    fn obvhs(mesh: &Mesh, cutouts: Option<Arc<Cutouts>>) -> Self {
         Self {
-            backend: Backend::Obvhs(Obvhs::build(mesh)),
+            backend: Backend::Obvhs(Obvhs::build(mesh, cutouts)),
             len: mesh.len(),
+            cut: 0,
         }
     }
 
     #[cfg(feature = "embree")]
-    fn embree(mesh: &Mesh, usage: BuildUse) -> Result<Self, AccelError> {
+    fn embree(
+        mesh: &Mesh,
+        cutouts: Option<Arc<Cutouts>>,
+        usage: BuildUse,
+    ) -> Result<Self, AccelError> {
         let quality = match usage {
             BuildUse::Still => lgh_embree::BuildQuality::Medium,
             BuildUse::Rebuilt => lgh_embree::BuildQuality::Low,
         };
         let vertices: &[[f32; 3]] = bytemuck::cast_slice(&mesh.positions);
-        let scene = lgh_embree::Scene::new(vertices, &mesh.triangles, quality)
+        let filter = cutouts.map(|c| -> lgh_embree::HitFilter {
+            Arc::new(move |t, uv| c.covers(t, Vec2::from(uv)))
+        });
+        let scene = lgh_embree::Scene::with_filter(vertices, &mesh.triangles, quality, filter)
             .map_err(|e| AccelError::Embree(e.to_string()))?;
         Ok(Self {
             backend: Backend::Embree(scene),
             len: mesh.len(),
+            cut: 0,
         })
     }
 
     #[cfg(not(feature = "embree"))]
     #[allow(clippy::unnecessary_wraps)]
-    fn embree(_: &Mesh, _: BuildUse) -> Result<Self, AccelError> {
+    fn embree(_: &Mesh, _: Option<Arc<Cutouts>>, _: BuildUse) -> Result<Self, AccelError> {
         Err(AccelError::NotBuilt)
     }
 
@@ -357,6 +422,12 @@ impl Accel {
     #[must_use]
     pub fn is_empty(&self) -> bool {
         self.len == 0
+    }
+
+    /// Number of triangles with an alpha cut-out.
+    #[must_use]
+    pub fn cut_out(&self) -> usize {
+        self.cut
     }
 
     /// The closest hit along `origin + t dir` for t in (0, `t_max`); `dir` must be unit length.

@@ -1,8 +1,10 @@
 //! A scene prepared for rendering: the scene, its BVH and the per-triangle data the passes
 //! read in their inner loops.
 
+use std::sync::Arc;
+
 use glam::{Vec2, Vec3};
-use lgh_scene::{Camera, Light, Scene};
+use lgh_scene::{Camera, Cutouts, Light, Scene};
 
 pub mod accel;
 pub mod lights;
@@ -17,6 +19,9 @@ pub struct World {
     pub scene: Scene,
     /// The BVH over the scene's triangles.
     pub accel: Accel,
+    /// The alpha cut-outs of the scene's triangles, which every ray tests (`None`: every
+    /// triangle is opaque).
+    pub cutouts: Option<Arc<Cutouts>>,
     /// Unit face normal of every triangle (counter-clockwise front).
     pub face_normals: Vec<Vec3>,
     /// All primary lights, with their sampling distributions.
@@ -40,6 +45,12 @@ pub struct World {
 fn next_geometry_id() -> u64 {
     static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+}
+
+/// The obvhs BVH of `mesh`, which cannot fail: where Embree cannot start.
+fn obvhs(mesh: &lgh_scene::Mesh, cutouts: &Option<Arc<Cutouts>>, usage: BuildUse) -> Accel {
+    Accel::build_cut(mesh, cutouts.clone(), AccelKind::Obvhs, usage)
+        .unwrap_or_else(|_| Accel::build(mesh))
 }
 
 /// The unit face normal of every triangle of `mesh`.
@@ -72,8 +83,15 @@ impl World {
     /// tables.
     #[must_use]
     pub fn new(scene: Scene) -> Self {
-        let accel = Accel::build(&scene.mesh);
-        Self::with(scene, accel)
+        let cutouts = Cutouts::of(&scene).map(Arc::new);
+        let accel = Accel::build_cut(
+            &scene.mesh,
+            cutouts.clone(),
+            AccelKind::default_kind(),
+            BuildUse::Still,
+        )
+        .unwrap_or_else(|_| obvhs(&scene.mesh, &cutouts, BuildUse::Still));
+        Self::with(scene, accel, cutouts)
     }
 
     /// Prepares `scene` as [`World::new`] does, with the ray tracer `kind`.
@@ -81,11 +99,12 @@ impl World {
     /// # Errors
     /// The backend is not in this build or cannot build the BVH.
     pub fn with_accel(scene: Scene, kind: AccelKind) -> Result<Self, AccelError> {
-        let accel = Accel::build_with(&scene.mesh, kind, BuildUse::Still)?;
-        Ok(Self::with(scene, accel))
+        let cutouts = Cutouts::of(&scene).map(Arc::new);
+        let accel = Accel::build_cut(&scene.mesh, cutouts.clone(), kind, BuildUse::Still)?;
+        Ok(Self::with(scene, accel, cutouts))
     }
 
-    fn with(scene: Scene, accel: Accel) -> Self {
+    fn with(scene: Scene, accel: Accel, cutouts: Option<Arc<Cutouts>>) -> Self {
         let face_normals = face_normals(&scene.mesh);
         let rest_mesh = (!scene.animation.objects.is_empty()).then(|| scene.mesh.clone());
         let (centre, radius) = scene.bounding_sphere();
@@ -96,6 +115,7 @@ impl World {
             rest_mesh,
             scene,
             accel,
+            cutouts,
             face_normals,
             lights,
             centre,
@@ -148,8 +168,10 @@ impl World {
                 });
             }
             // A moving mesh is rebuilt every frame: the fastest build of the same backend.
-            self.accel = Accel::build_with(&self.scene.mesh, self.accel.kind(), BuildUse::Rebuilt)
-                .unwrap_or_else(|_| Accel::build(&self.scene.mesh));
+            let (mesh, cutouts) = (&self.scene.mesh, &self.cutouts);
+            self.accel =
+                Accel::build_cut(mesh, cutouts.clone(), self.accel.kind(), BuildUse::Rebuilt)
+                    .unwrap_or_else(|_| obvhs(mesh, cutouts, BuildUse::Rebuilt));
             self.face_normals = face_normals(&self.scene.mesh);
             self.geometry_id = next_geometry_id();
         }

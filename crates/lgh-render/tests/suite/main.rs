@@ -7,6 +7,7 @@ mod brute_sampled;
 mod clamp;
 mod common;
 mod convergence;
+mod cutouts;
 mod determinism;
 mod direct_light;
 #[cfg(feature = "embree")]

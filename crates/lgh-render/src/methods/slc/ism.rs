@@ -62,7 +62,8 @@ pub struct PointCloud {
 
 impl PointCloud {
     /// Samples `count` points on the triangles of `world`, with probability proportional to
-    /// area, from `seed`.
+    /// area, from `seed`; points where an alpha cut-out removes the surface are dropped, and
+    /// the area is the part that is there (estimated from the points kept).
     #[must_use]
     pub fn sample(world: &World, count: usize, seed: u64) -> Self {
         let mesh = &world.scene.mesh;
@@ -70,21 +71,26 @@ impl PointCloud {
         let Some(dist) = Distribution1D::new(&areas) else {
             return Self::default();
         };
-        let (position, normal) = (0..count)
+        let (position, normal): (Vec<Vec3>, Vec<Vec3>) = (0..count)
             .into_par_iter()
-            .map(|k| {
+            .filter_map(|k| {
                 let mut rng = Rng::new(&[seed, k as u64, 0x15a]);
                 let (t, _) = dist.sample(rng.next_f32());
                 let [a, b, c] = mesh.vertices(t);
                 let bary = uniform_triangle(rng.next_2d());
+                let there = world
+                    .cutouts
+                    .as_ref()
+                    .is_none_or(|c| c.covers(t as u32, bary));
                 let p = a * (1.0 - bary.x - bary.y) + b * bary.x + c * bary.y;
-                (p, world.face_normals[t])
+                there.then(|| (p, world.face_normals[t]))
             })
             .unzip();
+        let kept = position.len() as f64 / count.max(1) as f64;
         Self {
             position,
             normal,
-            area: dist.total() as f32,
+            area: (dist.total() * kept) as f32,
         }
     }
 }
