@@ -23,7 +23,7 @@ pub struct Cutouts {
     cutout_of: Vec<u32>,
     /// The distinct cut-outs, their textures re-indexed into `textures`.
     cutouts: Vec<Cutout>,
-    /// The textures the cut-outs read.
+    /// The alpha of the textures the cut-outs read (their colour left out: empty texels).
     textures: Vec<Texture>,
 }
 
@@ -42,7 +42,11 @@ impl Cutouts {
             c.texture = c.texture.and_then(|t| {
                 let texture = scene.textures.get(t as usize)?;
                 Some(*texture_index.entry(t).or_insert_with(|| {
-                    textures.push(texture.clone());
+                    textures.push(Texture {
+                        texels: Vec::new(),
+                        alpha: texture.alpha.clone(),
+                        ..*texture
+                    });
                     textures.len() as u32 - 1
                 }))
             });
@@ -118,7 +122,8 @@ impl Cutouts {
         &self.cutouts
     }
 
-    /// The textures the cut-outs read.
+    /// The textures the cut-outs read: their alpha alone ([`Texture::alpha_at`]), no
+    /// colour.
     #[must_use]
     pub fn textures(&self) -> &[Texture] {
         &self.textures
