@@ -5,9 +5,11 @@ alpha cut-outs in the Wavefront format as exporters write them.
 A room of floor, back wall and left wall (metres, +y up) with a lattice screen held level
 at 1.2 m between a point light and the floor: one quad whose `map_d` (an RGBA PNG, the same
 file as its `map_Kd`) cuts square holes, so that the light falls through the holes onto
-the floor in a pattern of squares, and bounces. A standing screen with a second, rotated
-pattern (`-s 2 2` on its map_d alone) stands beside it. The holes exist only in the
-texture: a renderer that ignores map_d shows solid grey slabs and a dark floor.
+the floor in a pattern of squares, and bounces. A standing screen with a second pattern
+(`-s 2 2` on its map_d alone) stands beside it. The holes exist only in the texture: a
+renderer that ignores map_d shows solid grey slabs and a dark floor. The back wall's
+vertex colours (`v x y z r g b`, sRGB; white elsewhere) shade it from warm at the floor to
+cool at the top.
 
     python3 scripts/make_lattice_scene.py
 """
@@ -50,10 +52,11 @@ def lattice(n=16, bar=4):
 def main():
     png(os.path.join(OUT, "lattice.png"), 16, 16, lattice())
     v, vt, faces = [], [], []
+    white = (1, 1, 1)
 
-    def quad(material, corners, uvs):
+    def quad(material, corners, uvs, colors=(white,) * 4):
         base = len(v)
-        v.extend(corners)
+        v.extend(c + col for c, col in zip(corners, colors))
         vt.extend(uvs)
         ids = [base + k + 1 for k in range(4)]
         faces.append((material, [(ids[0], ids[1], ids[2]), (ids[0], ids[2], ids[3])]))
@@ -61,7 +64,9 @@ def main():
     flat = [(0, 0), (1, 0), (1, 1), (0, 1)]
     # Floor (facing up), back wall (facing +z), left wall (facing +x).
     quad("floor", [(-3, 0, -3), (-3, 0, 3), (3, 0, 3), (3, 0, -3)], flat)
-    quad("wall", [(-3, 0, -3), (3, 0, -3), (3, 3, -3), (-3, 3, -3)], flat)
+    warm, cool = (1, 0.55, 0.45), (0.5, 0.7, 1)
+    back = [(-3, 0, -3), (3, 0, -3), (3, 3, -3), (-3, 3, -3)]
+    quad("wall", back, flat, (warm, warm, cool, cool))
     quad("wall", [(-3, 0, -3), (-3, 3, -3), (-3, 3, 3), (-3, 0, 3)], flat)
     # The level screen at y = 1.2, both sides (two quads back to back), texture repeated
     # 4 x 4 times across its 2 m.
@@ -80,7 +85,7 @@ def main():
     with open(os.path.join(OUT, "lattice.obj"), "w") as f:
         f.write("# Written by scripts/make_lattice_scene.py.\nmtllib lattice.mtl\n")
         for p in v:
-            f.write("v %g %g %g\n" % p)
+            f.write("v %g %g %g %g %g %g\n" % p)
         for t in vt:
             f.write("vt %g %g\n" % t)
         for material, tris in faces:

@@ -11,7 +11,8 @@ use rayon::prelude::*;
 use crate::context::{GpuContext, GpuError};
 
 /// `TriShade` in `shaders/surface.wgsl` (80 bytes): face normal (w: the material's index,
-/// as bits), corner normals with the texture coordinates in their w and in `uv`.
+/// as bits), corner normals with the texture coordinates in their w and in `uv` (w: the
+/// word of its corners' vertex colours in the texel buffer as bits, 0 for white).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct TriShade {
@@ -59,10 +60,12 @@ impl GpuSurfaces {
         order: &[u32],
     ) -> Result<Self, GpuError> {
         let scene = &world.scene;
+        let mut texels = texel_words(&scene.textures);
+        let colors = append_colors(&mut texels, &scene.mesh, order);
         Ok(Self {
-            shade: ctx.storage("triangle shading", &shade_records(world, order))?,
+            shade: ctx.storage("triangle shading", &shade_records(world, order, &colors))?,
             materials: ctx.storage("materials", &materials(scene))?,
-            texels: ctx.storage("texels", &texel_words(&scene.textures))?,
+            texels: ctx.storage("texels", &texels)?,
         })
     }
 }
@@ -89,12 +92,32 @@ impl GpuSurfaces {
     }
 }
 
-/// Each triangle's [`TriShade`], in `order`.
-fn shade_records(world: &lgh_render::World, order: &[u32]) -> Vec<TriShade> {
+/// Appends the vertex colours of each triangle in `order` to the texel words (its three
+/// corners' linear RGB as float bits, 9 words) and returns each one's first word; none
+/// where the mesh has no colours (`TriShade.uv.w` 0: white).
+fn append_colors(words: &mut Vec<u32>, mesh: &lgh_scene::Mesh, order: &[u32]) -> Vec<u32> {
+    if mesh.colors.is_empty() {
+        return Vec::new();
+    }
+    let mut first = Vec::with_capacity(order.len());
+    for &t in order {
+        first.push(words.len() as u32);
+        for i in mesh.triangles[t as usize] {
+            let c = mesh.colors.get(i as usize).copied().unwrap_or(Vec3::ONE);
+            words.extend(c.to_array().map(f32::to_bits));
+        }
+    }
+    first
+}
+
+/// Each triangle's [`TriShade`], in `order`, with the first word of its colours
+/// (`colors`, by leaf; empty: none).
+fn shade_records(world: &lgh_render::World, order: &[u32], colors: &[u32]) -> Vec<TriShade> {
     let mesh = &world.scene.mesh;
     order
         .par_iter()
-        .map(|&t| {
+        .enumerate()
+        .map(|(leaf, &t)| {
             let t = t as usize;
             let [i0, i1, i2] = mesh.triangles[t].map(|i| i as usize);
             let [u0, u1, u2] = [i0, i1, i2].map(|i| mesh.uvs.get(i).copied().unwrap_or_default());
@@ -105,7 +128,12 @@ fn shade_records(world: &lgh_render::World, order: &[u32]) -> Vec<TriShade> {
                 n0: normal(i0).extend(u0.x),
                 n1: normal(i1).extend(u0.y),
                 n2: normal(i2).extend(u1.x),
-                uv: Vec4::new(u1.y, u2.x, u2.y, 0.0),
+                uv: Vec4::new(
+                    u1.y,
+                    u2.x,
+                    u2.y,
+                    f32::from_bits(colors.get(leaf).copied().unwrap_or(0)),
+                ),
             }
         })
         .collect()

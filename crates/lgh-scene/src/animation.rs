@@ -299,6 +299,7 @@ mod tests {
                 ],
                 normals: vec![Vec3::Y; 4],
                 uvs: Vec::new(),
+                colors: Vec::new(),
                 indices: vec![[0, 2, 1], [0, 3, 2]],
                 material: 0,
             };

@@ -233,6 +233,7 @@ pub fn cornell_box() -> Scene {
             positions: v,
             normals: Vec::new(),
             uvs: vec![Vec2::ZERO; 4],
+            colors: Vec::new(),
             indices: vec![[0, 1, 2], [0, 2, 3]],
             material: *material,
         };

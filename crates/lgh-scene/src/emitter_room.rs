@@ -25,6 +25,7 @@ fn quad(scene: &mut Scene, mut v: [Vec3; 4], towards: Vec3, material: u32) {
         positions: v.to_vec(),
         normals: Vec::new(),
         uvs: vec![Vec2::ZERO; 4],
+        colors: Vec::new(),
         indices: vec![[0, 1, 2], [0, 2, 3]],
         material,
     };

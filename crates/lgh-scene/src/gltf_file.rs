@@ -2,7 +2,7 @@
 //! `.glb`.
 //!
 //! Read: triangle primitives of every node of the default scene with their node transforms;
-//! base colour factor x base colour texture; emissive factor x
+//! base colour factor x base colour texture x the vertex colours `COLOR_0`; emissive factor x
 //! `KHR_materials_emissive_strength` x the emissive texture's mean over each triangle
 //! (`emissive_texture.rs`); `alphaMode` MASK (and BLEND with a texture's alpha) as a
 //! cut-out ([`Cutout`]); the first perspective camera; `KHR_lights_punctual` point, spot
@@ -186,10 +186,16 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
                 let material = p.material().index().map_or(default_material, |i| i as u32);
                 let map = uv_maps.get(material as usize).unwrap_or(&UvMap::IDENTITY);
                 let uvs = read_uvs(&reader, map);
+                // COLOR_0 (linear, RGB or RGBA; its alpha is not read).
+                let colors = reader
+                    .read_colors(0)
+                    .map(|it| it.into_rgb_f32().map(Vec3::from_array).collect())
+                    .unwrap_or_default();
                 let prim = Primitive {
                     positions,
                     normals,
                     uvs,
+                    colors,
                     indices,
                     material,
                 };
@@ -287,11 +293,14 @@ fn triangle_list(
         return Err("no POSITION attribute".into());
     };
     check_accessor(&position, buffers)?;
-    // Every attribute lgh may read: the normals and each coordinate set (a material may
-    // read any of them, `gltf_uv`, `emissive_texture`).
-    let read = p
-        .attributes()
-        .filter(|(s, _)| matches!(s, Semantic::Normals | Semantic::TexCoords(_)));
+    // Every attribute lgh may read: the normals, each coordinate set (a material may read
+    // any of them, `gltf_uv`, `emissive_texture`) and the first colour set.
+    let read = p.attributes().filter(|(s, _)| {
+        matches!(
+            s,
+            Semantic::Normals | Semantic::TexCoords(_) | Semantic::Colors(0)
+        )
+    });
     for (semantic, a) in read {
         check_accessor(&a, buffers)?;
         if a.count() != position.count() {

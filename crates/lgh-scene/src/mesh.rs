@@ -15,6 +15,10 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Vertex texture coordinates (zero when the file has none).
     pub uvs: Vec<Vec2>,
+    /// Vertex colours (linear RGB in [0, 1]) that multiply the albedo (glTF `COLOR_0`, OBJ
+    /// `v x y z r g b`): empty where no vertex has one, else one per vertex (white where
+    /// its primitive has none).
+    pub colors: Vec<Vec3>,
     /// Vertex indices of each triangle, counter-clockwise seen from the front.
     pub triangles: Vec<[u32; 3]>,
     /// Material index of each triangle.
@@ -35,6 +39,8 @@ pub struct Primitive {
     pub normals: Vec<Vec3>,
     /// Texture coordinates; empty if the file has none.
     pub uvs: Vec<Vec2>,
+    /// Vertex colours (linear RGB); empty if the file has none.
+    pub colors: Vec<Vec3>,
     /// Triangle vertex indices into the arrays above.
     pub indices: Vec<[u32; 3]>,
     /// Material of every triangle.
@@ -96,6 +102,18 @@ impl Mesh {
         }));
         self.uvs
             .extend((0..n).map(|i| prim.uvs.get(i).copied().unwrap_or(Vec2::ZERO)));
+        if !prim.colors.is_empty() || !self.colors.is_empty() {
+            // Earlier vertices without colours are white; colours are kept within [0, 1].
+            self.colors.resize(base as usize, Vec3::ONE);
+            self.colors.extend((0..n).map(|i| {
+                let c = prim.colors.get(i).copied().unwrap_or(Vec3::ONE);
+                if c.is_finite() {
+                    c.clamp(Vec3::ZERO, Vec3::ONE)
+                } else {
+                    Vec3::ONE
+                }
+            }));
+        }
         for (k, t) in prim.indices.iter().enumerate() {
             if t.iter().all(|&i| (i as usize) < n) {
                 self.triangles.push([t[0] + base, t[1] + base, t[2] + base]);
@@ -115,6 +133,18 @@ impl Mesh {
             self.positions[b as usize],
             self.positions[c as usize],
         ]
+    }
+
+    /// The vertex colour of triangle `t` at barycentrics (b1, b2) (white without colours).
+    #[inline]
+    #[must_use]
+    pub fn color_at(&self, t: usize, b: Vec2) -> Vec3 {
+        if self.colors.is_empty() {
+            return Vec3::ONE;
+        }
+        let [c0, c1, c2] =
+            self.triangles[t].map(|i| self.colors.get(i as usize).copied().unwrap_or(Vec3::ONE));
+        c0 * (1.0 - b.x - b.y) + c1 * b.x + c2 * b.y
     }
 
     /// Unnormalised face normal (v1 - v0) x (v2 - v0), twice the area in length.

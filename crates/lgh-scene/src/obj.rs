@@ -3,8 +3,8 @@
 //! Faces are triangulated; `Kd` is the albedo, `map_Kd` its texture (sRGB, relative to the
 //! MTL file; its options `-clamp`, `-o` and `-s` are read: `mtl_map.rs`), `Ke` the
 //! emitted radiance, times `map_Ke`'s mean over each triangle (`emissive_texture.rs`),
-//! `map_d` (its alpha, else its grey level, times `d`) a cut-out at 0.5 ([`Cutout`]). A
-//! missing MTL file or texture is a warning, not an error: the geometry still renders with
+//! `map_d` (its alpha, else its grey level, times `d`) a cut-out at 0.5 ([`Cutout`]);
+//! vertex colours (`v x y z r g b`, sRGB) multiply the albedo. A missing MTL file or texture is a warning, not an error: the geometry still renders with
 //! default materials. What old exporters wrote and the parser does not read is mended, with
 //! a warning: files in ISO-8859-1 or UTF-16 (decoded first), Windows path separators,
 //! colours of one number, materials and `usemtl` without a name.
@@ -21,7 +21,7 @@ use crate::error::contain_panics;
 use crate::mesh::Primitive;
 use crate::mtl_map;
 use crate::text;
-use crate::texture::Wrap;
+use crate::texture::{Wrap, srgb_to_linear};
 use crate::texture_file::{TexelBudget, TextureError};
 use crate::{Cutout, Material, Scene, SceneError, Texture};
 
@@ -174,6 +174,12 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
                 .normals
                 .chunks_exact(3)
                 .map(|n| Vec3::new(n[0], n[1], n[2]))
+                .collect(),
+            // `v x y z r g b`: sRGB-encoded, as Blender's and three.js's importers read it.
+            colors: m
+                .vertex_color
+                .chunks_exact(3)
+                .map(|c| Vec3::new(c[0], c[1], c[2]).map(|x| srgb_to_linear(x.clamp(0.0, 1.0))))
                 .collect(),
             uvs: {
                 let map = maps.get(material as usize).and_then(Option::as_ref);

@@ -1,6 +1,7 @@
 // The surface at a ray's hit, as lgh-render's World::surface computes it: the geometric
 // normal facing the ray, the interpolated shading normal (the geometric one where a corner
-// has none), the albedo (factor x bilinear texture, clamped to [0, 1]) and the one-sided
+// has none), the albedo (factor x bilinear texture, clamped to [0, 1], x the interpolated
+// vertex colours) and the one-sided
 // emission. It declares bindings 1-5 of every kernel that includes it, in the order of
 // lgh_gpu::surfaces::GpuSurfaces::bindings: the BVH's nodes and triangles (bvh.wgsl), the
 // triangles' shading data, the materials and the texels.
@@ -12,7 +13,7 @@ struct TriShade {
     n0: vec4<f32>,  // w: u0
     n1: vec4<f32>,  // w: v0
     n2: vec4<f32>,  // w: u1
-    uv: vec4<f32>,  // v1, u2, v2, unused
+    uv: vec4<f32>,  // v1, u2, v2, the first texel word of the corners' colours (0: white)
 }
 
 // A material: albedo factor (w: the texture's index, as bits; NO_TEXTURE for none) and
@@ -31,7 +32,8 @@ struct Material {
 
 const NO_TEXTURE: u32 = 0xffffffffu;
 // `texels` holds the sRGB decoding table (256 floats, as bits), then a header per texture
-// (first texel, width, height, unused), then the texels (8-bit sRGB, r | g << 8 | b << 16).
+// (first texel, width, height, unused), then the texels (8-bit sRGB, r | g << 8 | b << 16),
+// then the vertex colours of each triangle that has them (9 floats as bits).
 const TEXTURE_HEADERS: u32 = 256u;
 
 struct Surface {
@@ -114,11 +116,20 @@ fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
             t = vec3<f32>(0.0);
         }
     }
+    var albedo = clamp(m.albedo.xyz * t, vec3<f32>(0.0), vec3<f32>(1.0));
+    let c = bitcast<u32>(s.uv.w);
+    if (c != 0u) {
+        // Mesh::color_at.
+        let c0 = vec3<f32>(bitcast<f32>(texels[c]), bitcast<f32>(texels[c + 1u]), bitcast<f32>(texels[c + 2u]));
+        let c1 = vec3<f32>(bitcast<f32>(texels[c + 3u]), bitcast<f32>(texels[c + 4u]), bitcast<f32>(texels[c + 5u]));
+        let c2 = vec3<f32>(bitcast<f32>(texels[c + 6u]), bitcast<f32>(texels[c + 7u]), bitcast<f32>(texels[c + 8u]));
+        albedo = albedo * (c0 * b0 + c1 * b1 + c2 * b2);
+    }
     return Surface(
         o + d * hit.t,
         geo,
         normal,
-        clamp(m.albedo.xyz * t, vec3<f32>(0.0), vec3<f32>(1.0)),
+        albedo,
         select(vec3<f32>(0.0), m.emission.xyz, front),
     );
 }

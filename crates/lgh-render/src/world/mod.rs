@@ -70,7 +70,7 @@ pub struct SurfacePoint {
     /// Unit shading normal (interpolated vertex normals), in the same hemisphere as
     /// `geo_normal`.
     pub normal: Vec3,
-    /// Diffuse albedo (factor x texture).
+    /// Diffuse albedo (factor x texture x vertex colour).
     pub albedo: Vec3,
     /// Emitted radiance towards the ray's origin (zero when the back of an emitter is seen).
     pub emission: Vec3,
@@ -242,7 +242,7 @@ impl World {
             position: origin + dir * hit.t,
             geo_normal,
             normal,
-            albedo: material.albedo_at(&self.scene.textures, uv),
+            albedo: material.albedo_at(&self.scene.textures, uv) * mesh.color_at(t, hit.bary),
             emission: if front { material.emission } else { Vec3::ZERO },
             triangle: hit.triangle,
         }

@@ -23,5 +23,6 @@ mod sequence;
 mod shared_scenes;
 mod slc_method;
 mod unbiased;
+mod vertex_colors;
 mod vpl_energy;
 mod window_fill;

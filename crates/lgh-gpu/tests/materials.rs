@@ -1,7 +1,8 @@
-//! Alpha cut-outs on the GPU (`cutouts.rs`, `shaders/bvh.wgsl`'s `covers`) against the
-//! CPU's tracer, on the lattice scene (scenes/test/lattice.toml: two screens whose holes
-//! exist only in their textures' alpha): the GPU's primary rays, VPLs and shadow rays all
-//! pass through the holes as the CPU's do.
+//! What a surface is, on the GPU against the CPU, on the lattice scene
+//! (scenes/test/lattice.toml): alpha cut-outs (`cutouts.rs`, `shaders/bvh.wgsl`'s
+//! `covers`: two screens whose holes exist only in their textures' alpha; the GPU's primary
+//! rays, VPLs and shadow rays all pass through the holes as the CPU's do) and vertex
+//! colours (`surfaces.rs`, `shaders/surface.wgsl`: the back wall's).
 
 use lgh_render::image::metrics::diff;
 use lgh_render::methods::brute::BRUTE;
@@ -11,13 +12,14 @@ mod common;
 
 /// The brute force, all light (direct and indirect), on the GPU and on the CPU: within
 /// rel_rmse 0.005 (the area of the holes' edges where rounding decides the test differs
-/// by a few pixels' worth); without the cut-outs the CPU's image is far from both.
+/// by a few pixels' worth); without the cut-outs, or without the vertex colours, the
+/// CPU's image is far from both.
 #[test]
 #[cfg_attr(
     not(gpu_adapter),
     ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
 )]
-fn the_gpu_sees_through_the_holes_as_the_cpu_does() {
+fn the_gpu_sees_through_the_holes_and_the_colours_as_the_cpu_does() {
     let w = common::world(Some("test/lattice.toml"));
     assert_eq!(w.cutouts.as_ref().map(|c| c.len()), Some(6));
     let s = RenderSettings {
@@ -48,4 +50,13 @@ fn the_gpu_sees_through_the_holes_as_the_cpu_does() {
     let far = diff(&solid, &cpu).expect("same size");
     eprintln!("lattice without cut-outs against with: {far:?}");
     assert!(far.rel_rmse > 0.1, "{far:?}");
+    // The scene without its vertex colours: a white back wall.
+    let mut white = w.scene.clone();
+    white.mesh.colors.clear();
+    let white = render_frame(&World::new(white), &s, &Silent)
+        .expect("cpu")
+        .image;
+    let far = diff(&white, &cpu).expect("same size");
+    eprintln!("lattice without vertex colours against with: {far:?}");
+    assert!(far.rel_rmse > 0.05, "{far:?}");
 }
