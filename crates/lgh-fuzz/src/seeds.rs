@@ -1,26 +1,29 @@
 //! The seed inputs that mutation starts from: small valid files of every format lgh reads,
 //! each using as many of its format's features as the loaders handle (indexed and strip
-//! primitives, textures, cameras, every light type, animation keys), so that mutations reach
+//! primitives, textures, alpha cut-outs, vertex colours, cameras, every light type,
+//! animation keys), so that mutations reach
 //! deep into the loaders instead of stopping at the first byte.
 
 use base64::Engine;
 use base64::engine::general_purpose::STANDARD;
 use serde_json::{Value, json};
 
-/// A 2x2 RGB PNG texture.
+/// A 2x2 RGBA PNG texture whose alpha varies (cut-outs read it).
 #[must_use]
 pub fn png_texture() -> Vec<u8> {
-    let pixels: [u8; 12] = [255, 0, 0, 0, 255, 0, 0, 0, 255, 200, 200, 200];
+    let pixels: [u8; 16] = [
+        255, 0, 0, 255, 0, 255, 0, 128, 0, 0, 255, 0, 200, 200, 200, 255,
+    ];
     let mut out = std::io::Cursor::new(Vec::new());
-    let img = image::RgbImage::from_raw(2, 2, pixels.to_vec());
+    let img = image::RgbaImage::from_raw(2, 2, pixels.to_vec());
     if let Some(img) = img {
         let _ = img.write_to(&mut out, image::ImageFormat::Png);
     }
     out.into_inner()
 }
 
-/// The binary buffer of the glTF seed: a quad (4 positions, normals, uvs; 6 u16 indices) and
-/// a 5-vertex triangle strip (positions only).
+/// The binary buffer of the glTF seed: a quad (4 positions, normals, uvs; 6 u16 indices), a
+/// 5-vertex triangle strip (positions only) and the quad's vertex colours.
 fn gltf_buffer() -> Vec<u8> {
     let mut b = Vec::new();
     let f = |b: &mut Vec<u8>, v: &[f32]| v.iter().for_each(|x| b.extend(x.to_le_bytes()));
@@ -41,6 +44,11 @@ fn gltf_buffer() -> Vec<u8> {
     f(
         &mut b,
         &[0., 0., 0., 0., 1., 0., 1., 0., 0., 1., 1., 0., 2., 0., 0.],
+    );
+    // 200: quad colours (48)
+    f(
+        &mut b,
+        &[1., 0.5, 0.5, 0.5, 1., 0.5, 0.5, 0.5, 1., 1., 1., 1.],
     );
     b
 }
@@ -74,8 +82,9 @@ fn gltf_json(uri: Option<String>, byte_length: usize) -> Value {
               "spot": { "innerConeAngle": 0.3, "outerConeAngle": 0.6 } }
         ] } },
         "materials": [
-            { "name": "textured", "pbrMetallicRoughness": {
-                "baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 0.0,
+            { "name": "textured", "alphaMode": "MASK", "alphaCutoff": 0.4,
+              "pbrMetallicRoughness": {
+                "baseColorFactor": [0.8, 0.8, 0.8, 0.9], "metallicFactor": 0.0,
                 "baseColorTexture": { "index": 0 } } },
             { "name": "glow", "emissiveFactor": [1.0, 0.5, 0.2],
               "pbrMetallicRoughness": { "metallicFactor": 0.0 },
@@ -84,7 +93,8 @@ fn gltf_json(uri: Option<String>, byte_length: usize) -> Value {
         "textures": [{ "source": 0 }],
         "images": [{ "uri": image }],
         "meshes": [
-            { "primitives": [{ "attributes": { "POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2 },
+            { "primitives": [{ "attributes": { "POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2,
+                                               "COLOR_0": 5 },
                                "indices": 3, "material": 0 }] },
             { "primitives": [{ "attributes": { "POSITION": 4 }, "mode": 5, "material": 1 }] }
         ],
@@ -94,7 +104,8 @@ fn gltf_json(uri: Option<String>, byte_length: usize) -> Value {
             { "buffer": 0, "byteOffset": 48, "byteLength": 48 },
             { "buffer": 0, "byteOffset": 96, "byteLength": 32 },
             { "buffer": 0, "byteOffset": 128, "byteLength": 12 },
-            { "buffer": 0, "byteOffset": 140, "byteLength": 60 }
+            { "buffer": 0, "byteOffset": 140, "byteLength": 60 },
+            { "buffer": 0, "byteOffset": 200, "byteLength": 48 }
         ],
         "accessors": [
             { "bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
@@ -103,7 +114,8 @@ fn gltf_json(uri: Option<String>, byte_length: usize) -> Value {
             { "bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2" },
             { "bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR" },
             { "bufferView": 4, "componentType": 5126, "count": 5, "type": "VEC3",
-              "min": [0.0, 0.0, 0.0], "max": [2.0, 1.0, 0.0] }
+              "min": [0.0, 0.0, 0.0], "max": [2.0, 1.0, 0.0] },
+            { "bufferView": 5, "componentType": 5126, "count": 4, "type": "VEC3" }
         ]
     })
 }
@@ -146,15 +158,15 @@ pub fn glb() -> Vec<u8> {
 }
 
 /// An OBJ file: two objects, quads and triangles, positive and negative indices, texture
-/// coordinates and normals, and two materials of `scene.mtl`.
+/// coordinates and normals, vertex colours, and two materials of `scene.mtl`.
 pub const OBJ: &str = "\
 # seed
 mtllib scene.mtl
 o floor
-v -1 0 -1
-v 1 0 -1
-v 1 0 1
-v -1 0 1
+v -1 0 -1 1 0.5 0.5
+v 1 0 -1 0.5 1 0.5
+v 1 0 1 0.5 0.5 1
+v -1 0 1 1 1 1
 vt 0 0
 vt 1 0
 vt 1 1
@@ -163,25 +175,26 @@ vn 0 1 0
 usemtl white
 f 1/1/1 2/2/1 3/3/1 4/4/1
 o lamp
-v -0.2 1.9 -0.2
-v 0.2 1.9 -0.2
-v 0.2 1.9 0.2
-v -0.2 1.9 0.2
+v -0.2 1.9 -0.2 0.9 0.9 0.9
+v 0.2 1.9 -0.2 0.9 0.9 0.9
+v 0.2 1.9 0.2 0.9 0.9 0.9
+v -0.2 1.9 0.2 0.9 0.9 0.9
 usemtl light
 f -3 -2 -1
 f -4 -3 -1
 g wall
-v -1 0 -1
-v -1 2 -1
-v 1 2 -1
+v -1 0 -1 0.9 0.9 0.9
+v -1 2 -1 0.9 0.9 0.9
+v 1 2 -1 0.9 0.9 0.9
 f 9 10 11
 ";
 
-/// The MTL file of [`OBJ`]: a textured diffuse material and an emitter.
+/// The MTL file of [`OBJ`]: a textured diffuse material with a cut-out and an emitter.
 pub const MTL: &str = "\
 newmtl white
 Kd 0.8 0.8 0.8
 map_Kd -s 2 2 -clamp on texture.png
+map_d -s 4 4 texture.png
 illum 2
 newmtl light
 Kd 0.5 0.5 0.5

@@ -37,6 +37,7 @@ pub mod material;
 pub mod mesh;
 mod mtl_map;
 pub mod obj;
+mod obj_mend;
 pub mod scene;
 pub mod scene_file;
 mod text;

@@ -54,7 +54,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     // UTF-8 streams through the parser; a file it cannot read is read again, mended where
     // it can be (decoded from another encoding, `usemtl` without a name), and parsed again.
     let parsed = match parse(&mut BufReader::new(file)) {
-        Err(first) => match mended(path)? {
+        Err(first) => match crate::obj_mend::mended(path)? {
             Some((text, notes)) => {
                 // What the first pass found of its material libraries, found again.
                 *mtl_problem.borrow_mut() = None;
@@ -218,46 +218,6 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         }
     }
     Ok(scene)
-}
-
-/// The most bytes of an OBJ file that is read again to be mended ([`mended`]).
-const MAX_MENDED_BYTES: u64 = 1 << 30;
-
-/// The OBJ file at `path` as text the parser reads, with a warning for each change, where
-/// it needs one: decoded from UTF-16 or ISO-8859-1 (the parser reads UTF-8), and each
-/// `usemtl` without a name (Blender writes one for a slot without a material; the parser
-/// refuses it) naming no material, so that its faces take the default. `None` where
-/// nothing needs mending (or the file is over [`MAX_MENDED_BYTES`]).
-fn mended(path: &Path) -> Result<Option<(String, Vec<String>)>, SceneError> {
-    let size = std::fs::metadata(path).map_or(u64::MAX, |m| m.len());
-    if size > MAX_MENDED_BYTES {
-        return Ok(None);
-    }
-    let bytes = crate::file_kind::read_capped(path, MAX_MENDED_BYTES, "OBJ file")?;
-    let (text, encoding) = text::decode(bytes).map_err(|e| SceneError::new(path, e))?;
-    let mut notes: Vec<String> = encoding.warning("the OBJ file").into_iter().collect();
-    let bare = |line: &str| {
-        let mut words = line.split_whitespace();
-        words.next() == Some("usemtl") && words.next().is_none()
-    };
-    if !text.lines().any(bare) {
-        return Ok((!notes.is_empty()).then_some((text, notes)));
-    }
-    let mut out = String::with_capacity(text.len());
-    for (i, line) in text.lines().enumerate() {
-        if bare(line) {
-            notes.push(format!(
-                "{} line {}: `usemtl` without a name: its faces take the default material",
-                path.display(),
-                i + 1
-            ));
-            out.push_str("usemtl (no name)\n");
-        } else {
-            out.push_str(line);
-            out.push('\n');
-        }
-    }
-    Ok(Some((out, notes)))
 }
 
 /// A material library that exists but cannot be used: an error, where a missing library is
