@@ -218,6 +218,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             settings: &settings,
             threads,
             triangles: world.accel.len(),
+            cut_out_triangles: world.accel.cut_out(),
             accel: world.accel.kind().name(),
             device: device.clone(),
             load_ms,
@@ -229,11 +230,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     if !args.quiet {
         eprintln!(
-            "{}: {}x{}, {} triangles, {} VPLs from {} light paths, {} in {:.0} ms ({} threads) -> {}",
+            "{}: {}x{}, {} triangles{}, {} VPLs from {} light paths, {} in {:.0} ms ({} threads) -> {}",
             scene_name,
             settings.width,
             settings.height,
             world.accel.len(),
+            match world.accel.cut_out() {
+                0 => String::new(),
+                n => format!(" ({n} with alpha cut-outs)"),
+            },
             frame.vpls.len(),
             frame.vpls.paths,
             settings.method.name(),

@@ -36,6 +36,8 @@ pub struct FrameReport<'a> {
     pub threads: usize,
     /// Triangles in the BVH.
     pub triangles: usize,
+    /// Triangles with an alpha cut-out.
+    pub cut_out_triangles: usize,
     /// The ray tracer (`obvhs` or `embree`).
     pub accel: &'static str,
     /// Where the indirect light was computed: `cpu`, or the GPU adapter's name.
@@ -63,6 +65,8 @@ pub struct ReportContext<'a> {
     pub threads: usize,
     /// Triangles in the BVH.
     pub triangles: usize,
+    /// Triangles with an alpha cut-out.
+    pub cut_out_triangles: usize,
     /// The ray tracer.
     pub accel: &'static str,
     /// `cpu`, or the GPU adapter's name.
@@ -120,6 +124,7 @@ impl<'a> FrameReport<'a> {
             seed: s.seed,
             threads: c.threads,
             triangles: c.triangles,
+            cut_out_triangles: c.cut_out_triangles,
             accel: c.accel,
             device: c.device.clone(),
             accumulated_frames: c.frames,

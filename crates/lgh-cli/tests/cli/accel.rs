@@ -3,7 +3,7 @@
 use super::{assert_error, lgh, render_stats, temp_dir};
 
 /// The default is Embree in a build with the `embree` feature, else obvhs; the statistics
-/// say which one traced.
+/// say which one traced, and how many triangles have alpha cut-outs.
 #[test]
 fn render_reports_its_ray_tracer_and_obvhs_is_always_there() {
     let d = temp_dir("accel");
@@ -15,6 +15,30 @@ fn render_reports_its_ray_tracer_and_obvhs_is_always_there() {
     let stats = render_stats(&d, &[]);
     assert_eq!(stats["accel"], default);
     assert_eq!(stats["device"], "cpu");
+    assert_eq!(stats["cut_out_triangles"], 0);
+    // The lattice scene's two screens (6 triangles) are cut by their texture's alpha: the
+    // statistics and the summary line say so.
+    let lattice = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenes/test/lattice.toml"
+    );
+    assert_eq!(render_stats(&d, &[lattice])["cut_out_triangles"], 6);
+    let png = d.join("lattice.png");
+    let out = lgh(&[
+        "render",
+        lattice,
+        "--size",
+        "32x18",
+        "--vpls",
+        "200",
+        "--out",
+        png.to_str().expect("path"),
+    ]);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        said.contains("12 triangles (6 with alpha cut-outs)"),
+        "{said}"
+    );
     assert_eq!(render_stats(&d, &["--accel", "obvhs"])["accel"], "obvhs");
     let out = lgh(&["bench", "rays", "--rays", "2000", "--rounds", "1", "--json"]);
     assert!(
