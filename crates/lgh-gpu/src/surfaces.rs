@@ -5,7 +5,7 @@
 //! the same on both.
 
 use glam::{Vec3, Vec4};
-use lgh_scene::texture::{Texture, srgb_to_linear};
+use lgh_scene::texture::{Texture, code_table, nearest_code};
 use rayon::prelude::*;
 
 use crate::context::{GpuContext, GpuError};
@@ -24,12 +24,15 @@ pub struct TriShade {
 }
 
 /// `Material` in `shaders/surface.wgsl`: albedo factor (w: the texture's index as bits,
-/// [`NO_TEXTURE`] for none) and emission (w: the texture's wrap in u | in v << 2, as bits).
+/// [`NO_TEXTURE`] for none), emission (w: the texture's wrap in u | in v << 2, as bits) and
+/// the normal map (its texture's index as bits or [`NO_TEXTURE`], its scale, its wrap as
+/// bits, 0).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuMaterial {
     albedo: Vec4,
     emission: Vec4,
+    normal: Vec4,
 }
 
 /// A material without a texture (`NO_TEXTURE` in the WGSL).
@@ -150,53 +153,48 @@ fn materials(scene: &lgh_scene::Scene) -> Vec<GpuMaterial> {
                 .albedo_texture
                 .filter(|&k| (k as usize) < scene.textures.len())
                 .unwrap_or(NO_TEXTURE);
+            let wrap = |w: [lgh_scene::texture::Wrap; 2]| w[0].code() | w[1].code() << 2;
+            let normal = m
+                .normal_map
+                .filter(|n| (n.texture as usize) < scene.textures.len())
+                .map_or(Vec4::new(f32::from_bits(NO_TEXTURE), 1.0, 0.0, 0.0), |n| {
+                    Vec4::new(
+                        f32::from_bits(n.texture),
+                        n.scale,
+                        f32::from_bits(wrap(n.wrap)),
+                        0.0,
+                    )
+                });
             GpuMaterial {
                 albedo: m.albedo.extend(f32::from_bits(k)),
-                emission: m.emission.extend(f32::from_bits(
-                    m.albedo_wrap[0].code() | m.albedo_wrap[1].code() << 2,
-                )),
+                emission: m.emission.extend(f32::from_bits(wrap(m.albedo_wrap))),
+                normal,
             }
         })
         .collect()
 }
 
-/// The sRGB decoding table: `srgb_to_linear(i / 255)`, as `Texture::from_srgb8` decodes.
-fn srgb_table() -> [f32; TABLE] {
-    std::array::from_fn(|i| srgb_to_linear(i as f32 / 255.0))
-}
-
-/// The code of the 8-bit sRGB value that decodes to `linear`: exact for a texel that
-/// `Texture::from_srgb8` decoded, the nearest otherwise.
-fn encode(table: &[f32; TABLE], linear: f32) -> u32 {
-    let i = table.partition_point(|&x| x < linear).min(TABLE - 1);
-    let below = i.saturating_sub(1);
-    let nearer = if (table[below] - linear).abs() <= (table[i] - linear).abs() {
-        below
-    } else {
-        i
-    };
-    nearer as u32
-}
-
 /// The texel buffer: the sRGB table (256 words, float bits), a header per texture (first
-/// texel, width, height, 0), then each texture's texels, r | g << 8 | b << 16.
+/// texel, width, height, 1 if its texels are data (`Texture::linear`: code / 255) else 0),
+/// then each texture's texels as 8-bit codes, r | g << 8 | b << 16.
 #[must_use]
 pub fn texel_words(textures: &[Texture]) -> Vec<u32> {
-    let table = srgb_table();
-    let mut words: Vec<u32> = table.iter().map(|x| x.to_bits()).collect();
+    let srgb = code_table(false);
+    let mut words: Vec<u32> = srgb.iter().map(|x| x.to_bits()).collect();
     let mut first = TABLE + 4 * textures.len();
     for t in textures {
-        words.extend([first as u32, t.width, t.height, 0]);
+        words.extend([first as u32, t.width, t.height, u32::from(t.linear)]);
         first += t.texels.len();
     }
     for t in textures {
+        let table = code_table(t.linear);
         let at = words.len();
         words.resize(at + t.texels.len(), 0);
         words[at..]
             .par_iter_mut()
             .zip(&t.texels)
             .for_each(|(w, c)| {
-                let [r, g, b] = c.to_array().map(|x| encode(&table, x));
+                let [r, g, b] = c.to_array().map(|x| u32::from(nearest_code(&table, x)));
                 *w = r | g << 8 | b << 16;
             });
     }
@@ -208,15 +206,17 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_srgb_code_round_trips_and_other_values_take_the_nearest() {
-        let table = srgb_table();
-        for (i, &x) in table.iter().enumerate() {
-            assert_eq!(encode(&table, x), i as u32);
+    fn every_code_round_trips_and_other_values_take_the_nearest() {
+        for linear in [false, true] {
+            let table = code_table(linear);
+            for (i, &x) in table.iter().enumerate() {
+                assert_eq!(usize::from(nearest_code(&table, x)), i);
+            }
+            assert_eq!(nearest_code(&table, -1.0), 0);
+            assert_eq!(nearest_code(&table, 2.0), 255);
+            let between = 0.5 * (table[100] + table[101]) - 1e-6;
+            assert_eq!(nearest_code(&table, between), 100);
         }
-        assert_eq!(encode(&table, -1.0), 0);
-        assert_eq!(encode(&table, 2.0), 255);
-        let between = 0.5 * (table[100] + table[101]) - 1e-6;
-        assert_eq!(encode(&table, between), 100);
     }
 
     #[test]

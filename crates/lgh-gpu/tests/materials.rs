@@ -60,3 +60,61 @@ fn the_gpu_sees_through_the_holes_and_the_colours_as_the_cpu_does() {
     eprintln!("lattice without vertex colours against with: {far:?}");
     assert!(far.rel_rmse > 0.05, "{far:?}");
 }
+
+/// A normal map of ripples on the lattice scene's floor and walls (`NormalMap`, read as
+/// data): the GPU's G-buffer normals bend as the CPU's do, and its light paths do not
+/// (brute force, all light, rel_rmse within 0.005), and the image without the map is far
+/// from it.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn the_gpu_bends_the_normals_the_camera_sees_as_the_cpu_does() {
+    let mut scene = common::world(Some("test/lattice.toml")).scene.clone();
+    let n = 16usize;
+    let mut bytes = Vec::new();
+    for y in 0..n {
+        for x in 0..n {
+            let a = std::f32::consts::TAU * x as f32 / n as f32;
+            let b = std::f32::consts::TAU * y as f32 / n as f32;
+            bytes
+                .extend([128.0 + 100.0 * a.sin(), 128.0 + 100.0 * b.cos(), 190.0].map(|v| v as u8));
+        }
+    }
+    let tex = lgh_scene::Texture::from_linear8(n as u32, n as u32, 3, &bytes).expect("texture");
+    scene.textures.push(tex);
+    let map = lgh_scene::normal_map::NormalMap {
+        texture: scene.textures.len() as u32 - 1,
+        wrap: [lgh_scene::texture::Wrap::Repeat; 2],
+        scale: 0.8,
+    };
+    let flat = World::new(scene.clone());
+    for m in &mut scene.materials {
+        if m.name == "floor" || m.name == "wall" {
+            m.normal_map = Some(map);
+        }
+    }
+    let w = World::new(scene);
+    let s = RenderSettings {
+        method: BRUTE,
+        width: 64,
+        height: 36,
+        vpls: 2000,
+        component: Component::All,
+        ..RenderSettings::default()
+    };
+    let cpu = render_frame(&w, &s, &Silent).expect("cpu").image;
+    let gpu_settings = RenderSettings {
+        method: lgh_gpu::brute::BRUTE_GPU,
+        ..s.clone()
+    };
+    let gpu = render_frame(&w, &gpu_settings, &Silent).expect("gpu").image;
+    let m = diff(&gpu, &cpu).expect("same size");
+    eprintln!("normal-mapped lattice, brute, GPU against CPU: {m:?}");
+    assert!(m.rel_rmse <= 0.005, "{m:?}");
+    let plain = render_frame(&flat, &s, &Silent).expect("cpu").image;
+    let far = diff(&plain, &cpu).expect("same size");
+    eprintln!("without the normal map against with: {far:?}");
+    assert!(far.rel_rmse > 0.05, "{far:?}");
+}

@@ -7,7 +7,8 @@
 //! (`emissive_texture.rs`); `alphaMode` MASK (and BLEND with a texture's alpha) as a
 //! cut-out ([`Cutout`]); the first perspective camera; `KHR_lights_punctual` point, spot
 //! and directional lights (colour x intensity taken as radiant intensity or irradiance). Not
-//! read: metallic-roughness, normal maps, skins, morph targets (the surfaces are diffuse).
+//! read: metallic-roughness, skins, morph targets (the surfaces are diffuse). Normal maps
+//! (`normalTexture` on the base colour's coordinates) bend the shading normal.
 
 use std::path::Path;
 
@@ -17,6 +18,7 @@ use crate::emissive_texture::{EmissiveMap, Emitters};
 use crate::error::contain_panics;
 use crate::gltf_uv::{UvMap, wrap};
 use crate::mesh::Primitive;
+use crate::normal_map::NormalMap;
 use crate::obj::file_stem;
 use crate::texture::Wrap;
 use crate::{Camera, Cutout, Light, Material, Scene, SceneError};
@@ -56,6 +58,86 @@ fn cutout_of(
     Cutout::new(texture, wrap, a, cutoff).needed(textures)
 }
 
+/// The normal maps of a file's materials: each image read as data ([`Texture::linear`])
+/// once, in place where no material reads it as colour, else as a copy.
+struct NormalMaps {
+    /// The scene texture of each image (as colour), from the import.
+    texture_of_image: Vec<Option<u32>>,
+    /// Images some material reads as colour (base colour, emission).
+    colour: std::collections::HashSet<usize>,
+    /// The data texture of each image made so far.
+    linear: std::collections::HashMap<usize, u32>,
+    /// Materials whose normal map reads other coordinates than their base colour.
+    skipped: Vec<String>,
+}
+
+impl NormalMaps {
+    fn new(doc: &gltf::Document, texture_of_image: &[Option<u32>]) -> Self {
+        let colour = doc
+            .materials()
+            .flat_map(|m| {
+                let base = m.pbr_metallic_roughness().base_color_texture();
+                [base, m.emissive_texture()]
+                    .into_iter()
+                    .flatten()
+                    .map(|i| i.texture().source().index())
+            })
+            .collect();
+        Self {
+            texture_of_image: texture_of_image.to_vec(),
+            colour,
+            linear: std::collections::HashMap::new(),
+            skipped: Vec::new(),
+        }
+    }
+
+    /// The normal map of material `m`, whose primitives' coordinates are those of `uv`
+    /// (its base colour's): read only where its own set is that one (its transform, which
+    /// the `gltf` crate does not give for normal textures, is taken to be the base
+    /// colour's).
+    fn of(&mut self, m: &gltf::Material, uv: UvMap, scene: &mut Scene) -> Option<NormalMap> {
+        let nt = m.normal_texture()?;
+        if nt.tex_coord() != uv.set {
+            self.skipped.push(m.name().unwrap_or("unnamed").to_string());
+            return None;
+        }
+        let image = nt.texture().source().index();
+        let k = (*self.texture_of_image.get(image)?)?;
+        let texture = match self.linear.get(&image) {
+            Some(&t) => t,
+            None => {
+                let data = scene.textures.get(k as usize)?.as_linear();
+                let t = if self.colour.contains(&image) {
+                    scene.textures.push(data);
+                    scene.textures.len() as u32 - 1
+                } else {
+                    *scene.textures.get_mut(k as usize)? = data;
+                    k
+                };
+                self.linear.insert(image, t);
+                t
+            }
+        };
+        let sampler = nt.texture().sampler();
+        let scale = nt.scale();
+        Some(NormalMap {
+            texture,
+            wrap: [sampler.wrap_s(), sampler.wrap_t()].map(wrap),
+            scale: if scale.is_finite() { scale } else { 1.0 },
+        })
+    }
+
+    /// One warning naming the materials whose normal maps were not read.
+    fn warning(&self) -> Option<String> {
+        let first = self.skipped.first()?;
+        Some(format!(
+            "{} materials ('{first}'{}) have a normal map on another coordinate set than their base colour; it is not read",
+            self.skipped.len(),
+            if self.skipped.len() > 1 { ", ..." } else { "" }
+        ))
+    }
+}
+
 /// [`load`] of a file that exists.
 fn load_checked(path: &Path) -> Result<Scene, SceneError> {
     let crate::gltf_import::Import {
@@ -82,6 +164,7 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
         }));
     }
     // Per material, the texture coordinates its base colour reads, and its emissive texture.
+    let mut normal_maps = NormalMaps::new(&doc, &texture_of_image);
     let mut uv_maps = Vec::with_capacity(doc.materials().len());
     // Blended materials of uniform alpha (glass): opaque here, said once below.
     let mut blended = Vec::new();
@@ -109,6 +192,8 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
         let strength = m.emissive_strength().unwrap_or(1.0);
         let name = m.name().unwrap_or("unnamed");
         let cutout = cutout_of(&m, albedo_texture, albedo_wrap, a, &scene.textures);
+        let uv_map = uv_maps.last().copied().unwrap_or(UvMap::IDENTITY);
+        let normal_map = normal_maps.of(&m, uv_map, &mut scene);
         if m.alpha_mode() == AlphaMode::Blend && cutout.is_none() && a < 1.0 {
             blended.push(name);
         }
@@ -119,8 +204,10 @@ fn load_checked(path: &Path) -> Result<Scene, SceneError> {
             albedo_wrap,
             emission: Vec3::from_array(m.emissive_factor()) * strength,
             cutout,
+            normal_map,
         });
     }
+    scene.report.warnings.extend(normal_maps.warning());
     if let Some(first) = blended.first() {
         scene.report.warnings.push(format!(
             "{} materials ('{first}'{}) are blended with a uniform alpha below 1 (glass); lgh \

@@ -7,6 +7,7 @@
 //! | [`scene`] | [`Scene`]: one world-space triangle mesh, materials, textures, lights, camera |
 //! | [`mesh`] | [`Mesh`]: triangles, structure-of-arrays |
 //! | [`material`], [`texture`] | diffuse albedo (factor x texture), emitted radiance, alpha cut-outs |
+//! | [`normal_map`] | tangent-space normal maps: the shading normal bent per hit |
 //! | [`cutouts`] | [`Cutouts`]: the alpha test of every ray, per triangle, for the tracers |
 //! | [`light`] | point, spot and directional lights (emissive triangles come from materials) |
 //! | [`camera`] | a pinhole camera and its primary rays |
@@ -36,10 +37,13 @@ pub mod light;
 pub mod material;
 pub mod mesh;
 mod mtl_map;
+pub mod normal_map;
 pub mod obj;
 mod obj_mend;
 pub mod scene;
 pub mod scene_file;
+#[cfg(test)]
+mod test_files;
 mod text;
 pub mod texture;
 pub mod texture_file;

@@ -2,6 +2,7 @@
 
 use glam::{Vec2, Vec3};
 
+pub use crate::normal_map::NormalMap;
 use crate::texture::{Texture, Wrap};
 
 /// A Lambertian material: albedo = `albedo` x texture (if any); emitted radiance `emission`
@@ -21,6 +22,8 @@ pub struct Material {
     pub emission: Vec3,
     /// Where the surface is not there at all (leaves, fences), if anywhere.
     pub cutout: Option<Cutout>,
+    /// A tangent-space normal map that bends the shading normal, if any.
+    pub normal_map: Option<NormalMap>,
 }
 
 /// An alpha cut-out: the surface exists where alpha = `factor` x the texture's alpha (1
@@ -98,6 +101,7 @@ impl Default for Material {
             albedo_wrap: [Wrap::Repeat; 2],
             emission: Vec3::ZERO,
             cutout: None,
+            normal_map: None,
         }
     }
 }

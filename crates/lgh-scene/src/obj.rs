@@ -144,6 +144,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             albedo_wrap: [map.as_ref().map_or(Wrap::Repeat, |m| m.wrap); 2],
             emission,
             cutout,
+            normal_map: None,
         });
         maps.push(map.filter(|m| !m.keeps_coordinates()));
         emissive_maps.push(emissive);

@@ -16,6 +16,9 @@ pub struct Texture {
     /// The alpha channel, 8 bits a texel in the order of `texels` (a coverage, not sRGB
     /// encoded); empty where every texel is opaque. Read by cut-outs ([`crate::Cutout`]).
     pub alpha: Vec<u8>,
+    /// True if the texels are the stored 8-bit values / 255, not sRGB decoded: data, not
+    /// colour (normal maps, [`crate::material::NormalMap`]).
+    pub linear: bool,
 }
 
 /// sRGB electro-optical transfer function: an encoded value in [0, 1] to linear.
@@ -26,6 +29,28 @@ pub fn srgb_to_linear(c: f32) -> f32 {
         c / 12.92
     } else {
         ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The value of each 8-bit code: sRGB decoded ([`srgb_to_linear`]), or code / 255 for data.
+#[must_use]
+pub fn code_table(linear: bool) -> [f32; 256] {
+    std::array::from_fn(|i| {
+        let x = i as f32 / 255.0;
+        if linear { x } else { srgb_to_linear(x) }
+    })
+}
+
+/// The code whose value in `table` ([`code_table`]) is nearest to `x`: exact for a value
+/// the table holds.
+#[must_use]
+pub fn nearest_code(table: &[f32; 256], x: f32) -> u8 {
+    let i = table.partition_point(|&t| t < x).min(255);
+    let below = i.saturating_sub(1);
+    if (table[below] - x).abs() <= (table[i] - x).abs() {
+        below as u8
+    } else {
+        i as u8
     }
 }
 
@@ -80,11 +105,54 @@ impl Texture {
     /// dimension is zero.
     #[must_use]
     pub fn from_srgb8(width: u32, height: u32, channels: usize, bytes: &[u8]) -> Option<Self> {
+        Self::from_8bit(width, height, channels, bytes, false)
+    }
+
+    /// A texture of data (a normal map) from 8-bit RGB(A) bytes, each value read as
+    /// value / 255 (`channels` as in [`Texture::from_srgb8`]).
+    #[must_use]
+    pub fn from_linear8(width: u32, height: u32, channels: usize, bytes: &[u8]) -> Option<Self> {
+        Self::from_8bit(width, height, channels, bytes, true)
+    }
+
+    /// The 8-bit value of each channel of each texel: the bytes the texture was made from
+    /// (exact for a texture of 8-bit values, the nearest code otherwise), RGBA.
+    #[must_use]
+    pub fn codes(&self) -> Vec<u8> {
+        let table = code_table(self.linear);
+        let code = |x: f32| nearest_code(&table, x);
+        self.texels
+            .iter()
+            .enumerate()
+            .flat_map(|(k, c)| {
+                let a = self.alpha.get(k).copied().unwrap_or(255);
+                [code(c.x), code(c.y), code(c.z), a]
+            })
+            .collect()
+    }
+
+    /// This texture's 8-bit values read as data ([`Texture::from_linear8`]).
+    #[must_use]
+    pub fn as_linear(&self) -> Self {
+        if self.linear {
+            return self.clone();
+        }
+        let bytes = self.codes();
+        Self::from_linear8(self.width, self.height, 4, &bytes).unwrap_or_else(|| self.clone())
+    }
+
+    fn from_8bit(
+        width: u32,
+        height: u32,
+        channels: usize,
+        bytes: &[u8],
+        linear: bool,
+    ) -> Option<Self> {
         let n = width as usize * height as usize;
         if n == 0 || channels < 3 || bytes.len() < n * channels {
             return None;
         }
-        let lut: Vec<f32> = (0..256).map(|i| srgb_to_linear(i as f32 / 255.0)).collect();
+        let lut = code_table(linear);
         let pixels = || bytes.chunks_exact(channels).take(n);
         let texels = pixels()
             .map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
@@ -98,6 +166,7 @@ impl Texture {
             height,
             texels,
             alpha,
+            linear,
         })
     }
 

@@ -99,7 +99,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let hit = trace(c.origin, d, 3.4e38, false);
         var seen = Seen(false, vec3<f32>(0.0), vec3<f32>(0.0), false);
         if (hit.tri != NONE) {
-            let sf = surface_at(hit, c.origin, d);
+            let sf = surface_at(hit, c.origin, d, true);
             seen = Seen(true, sf.position, sf.geo_normal, any(sf.emission != vec3<f32>(0.0)));
         }
         // best_match: the pixel itself, else the nearest neighbour (the first of equals).

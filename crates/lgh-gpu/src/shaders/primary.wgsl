@@ -23,7 +23,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         emission[p] = vec4<f32>(0.0);
         return;
     }
-    let s = surface_at(hit, camera.origin, d);
+    let s = surface_at(hit, camera.origin, d, true);
     let depth = dot(s.position - camera.origin, camera.forward);
     gbuffer[p] = Pixel(
         vec4<f32>(s.position, 1.0),

@@ -16,12 +16,14 @@ struct TriShade {
     uv: vec4<f32>,  // v1, u2, v2, the first texel word of the corners' colours (0: white)
 }
 
-// A material: albedo factor (w: the texture's index, as bits; NO_TEXTURE for none) and
+// A material: albedo factor (w: the texture's index, as bits; NO_TEXTURE for none),
 // emitted radiance (w: the texture's wrap in u | in v << 2, as bits: lgh-scene's
-// Wrap::code).
+// Wrap::code) and the normal map (its texture's index as bits or NO_TEXTURE, its scale, its
+// wrap as bits).
 struct Material {
     albedo: vec4<f32>,
     emission: vec4<f32>,
+    normal: vec4<f32>,
 }
 
 @group(0) @binding(1) var<storage, read> nodes: array<Node>;
@@ -32,7 +34,8 @@ struct Material {
 
 const NO_TEXTURE: u32 = 0xffffffffu;
 // `texels` holds the sRGB decoding table (256 floats, as bits), then a header per texture
-// (first texel, width, height, unused), then the texels (8-bit sRGB, r | g << 8 | b << 16),
+// (first texel, width, height, 1 for data read as code / 255 else 0 for sRGB), then the
+// texels (8-bit codes, r | g << 8 | b << 16),
 // then the vertex colours of each triangle that has them (9 floats as bits).
 const TEXTURE_HEADERS: u32 = 256u;
 
@@ -44,13 +47,17 @@ struct Surface {
     emission: vec3<f32>,
 }
 
-// A texel decoded to linear RGB.
-fn texel(at: u32) -> vec3<f32> {
+// A texel decoded to linear RGB: through the sRGB table, or as code / 255 for data.
+fn texel(at: u32, linear: bool) -> vec3<f32> {
     let t = texels[at];
+    let code = vec3<u32>(t & 0xffu, (t >> 8u) & 0xffu, (t >> 16u) & 0xffu);
+    if (linear) {
+        return vec3<f32>(code) / 255.0;
+    }
     return vec3<f32>(
-        bitcast<f32>(texels[t & 0xffu]),
-        bitcast<f32>(texels[(t >> 8u) & 0xffu]),
-        bitcast<f32>(texels[(t >> 16u) & 0xffu]),
+        bitcast<f32>(texels[code.x]),
+        bitcast<f32>(texels[code.y]),
+        bitcast<f32>(texels[code.z]),
     );
 }
 
@@ -65,6 +72,7 @@ fn sample_texture(k: u32, uv: vec2<f32>, wrap: u32) -> vec3<f32> {
     let first = texels[head];
     let w = i32(texels[head + 1u]);
     let h = i32(texels[head + 2u]);
+    let linear = texels[head + 3u] != 0u;
     let wu = wrap & 3u;
     let wv = (wrap >> 2u) & 3u;
     let x = wrap_coordinate(uv.x, wu) * f32(w) - 0.5;
@@ -77,8 +85,8 @@ fn sample_texture(k: u32, uv: vec2<f32>, wrap: u32) -> vec3<f32> {
     let xb = wrap_texel(i32(x0) + 1, w, wu);
     let ya = wrap_texel(i32(y0), h, wv);
     let yb = wrap_texel(i32(y0) + 1, h, wv);
-    let top = lerp3(texel(first + u32(ya * w + xa)), texel(first + u32(ya * w + xb)), fx);
-    let bottom = lerp3(texel(first + u32(yb * w + xa)), texel(first + u32(yb * w + xb)), fx);
+    let top = lerp3(texel(first + u32(ya * w + xa), linear), texel(first + u32(ya * w + xb), linear), fx);
+    let bottom = lerp3(texel(first + u32(yb * w + xa), linear), texel(first + u32(yb * w + xb), linear), fx);
     return lerp3(top, bottom, fy);
 }
 
@@ -88,8 +96,44 @@ fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
     return select(vec3<f32>(0.0), v * (1.0 / len), len > 0.0 && len < 3.0e38);
 }
 
-// The surface that the ray o + t d (d of unit length) meets at `hit` (a hit, not a miss).
-fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
+// lgh-scene's normal_map::bend: n bent to the tangent-space normal m in the frame of the
+// triangle of corners p0..p2 and texture coordinates t0..t2.
+fn bend_normal(
+    n: vec3<f32>,
+    geo: vec3<f32>,
+    p0: vec3<f32>,
+    p1: vec3<f32>,
+    p2: vec3<f32>,
+    t0: vec2<f32>,
+    t1: vec2<f32>,
+    t2: vec2<f32>,
+    m: vec3<f32>,
+) -> vec3<f32> {
+    let e1 = p1 - p0;
+    let e2 = p2 - p0;
+    let d1 = t1 - t0;
+    let d2 = t2 - t0;
+    let det = d1.x * d2.y - d1.y * d2.x;
+    if (det == 0.0 || !(abs(det) < 3.4e38)) {
+        return n;
+    }
+    let dpdu = (e1 * d2.y - e2 * d1.y) / det;
+    let dpdv = (e2 * d1.x - e1 * d2.x) / det;
+    let tangent = normalize_or_zero(dpdu - n * dot(n, dpdu));
+    let b = dpdv - n * dot(n, dpdv);
+    let bitangent = normalize_or_zero(b - tangent * dot(tangent, b));
+    let bent = normalize_or_zero(tangent * m.x + bitangent * m.y + n * m.z);
+    let zero = vec3<f32>(0.0);
+    if (all(tangent == zero) || all(bitangent == zero) || dot(bent, geo) <= 0.0) {
+        return n;
+    }
+    return bent;
+}
+
+// The surface that the ray o + t d (d of unit length) meets at `hit` (a hit, not a miss):
+// World::camera_surface with `bend` (camera rays: the normal map bends the normal),
+// World::surface without (light paths).
+fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>, bend: bool) -> Surface {
     let s = shade[hit.tri];
     let b1 = hit.b1;
     let b2 = hit.b2;
@@ -108,6 +152,23 @@ fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
     }
     let uv = vec2<f32>(s.n0.w, s.n1.w) * b0 + vec2<f32>(s.n2.w, s.uv.x) * b1 + s.uv.yz * b2;
     let m = materials[bitcast<u32>(s.face.w)];
+    let nk = bitcast<u32>(m.normal.x);
+    if (bend && nk != NO_TEXTURE) {
+        // NormalMap::bend.
+        let tn = sample_texture(nk, uv, bitcast<u32>(m.normal.z)) * 2.0 - vec3<f32>(1.0);
+        let mn = vec3<f32>(tn.x * m.normal.y, tn.y * m.normal.y, tn.z);
+        normal = bend_normal(
+            normal,
+            geo,
+            tris[3u * hit.tri].xyz,
+            tris[3u * hit.tri + 1u].xyz,
+            tris[3u * hit.tri + 2u].xyz,
+            vec2<f32>(s.n0.w, s.n1.w),
+            vec2<f32>(s.n2.w, s.uv.x),
+            s.uv.yz,
+            mn,
+        );
+    }
     let k = bitcast<u32>(m.albedo.w);
     var t = vec3<f32>(1.0);
     if (k != NO_TEXTURE) {

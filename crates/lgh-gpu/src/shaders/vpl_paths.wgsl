@@ -49,7 +49,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             if (hit.tri == NONE) {
                 break;
             }
-            let sf = surface_at(hit, origin, dir);
+            let sf = surface_at(hit, origin, dir, false);
             let reflected = flux * sf.albedo;
             let finite = all(abs(reflected) <= vec3<f32>(3.4028235e38));
             if (max(reflected.x, max(reflected.y, reflected.z)) <= 0.0 || !finite) {

@@ -149,7 +149,7 @@ impl EdgeResolve {
                     let mut counts = [0u8; 9];
                     counts[4] = 1; // the centre sample is the pixel's own shaded point
                     for &o in &offsets[1..] {
-                        let s = world.trace(
+                        let s = world.trace_camera(
                             camera.origin,
                             camera.direction(camera.sample_point(x, y) + o),
                         );

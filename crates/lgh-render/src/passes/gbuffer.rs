@@ -153,7 +153,7 @@ impl GBuffer {
                 |(y, (position, normal, geo_normal, albedo, depth, emission))| {
                     for x in 0..position.len() {
                         let px = frame.sample_point(x as u32, y as u32);
-                        let hit = world.trace(frame.origin, frame.direction(px));
+                        let hit = world.trace_camera(frame.origin, frame.direction(px));
                         let Some(s) = hit else {
                             position[x] = Vec3::ZERO;
                             normal[x] = Vec3::ZERO;

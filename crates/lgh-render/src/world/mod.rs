@@ -67,8 +67,8 @@ pub struct SurfacePoint {
     pub position: Vec3,
     /// Unit geometric normal, on the side the ray came from.
     pub geo_normal: Vec3,
-    /// Unit shading normal (interpolated vertex normals), in the same hemisphere as
-    /// `geo_normal`.
+    /// Unit shading normal (interpolated vertex normals; seen from the camera, bent by the
+    /// material's normal map), in the same hemisphere as `geo_normal`.
     pub normal: Vec3,
     /// Diffuse albedo (factor x texture x vertex colour).
     pub albedo: Vec3,
@@ -214,9 +214,36 @@ impl World {
         (self.rest.0.clone(), &self.rest.1)
     }
 
-    /// The surface at `hit` seen along the unit direction `dir`.
+    /// The surface at `hit` seen along the unit direction `dir` by a light path: its shading
+    /// normal is the interpolated one, without the material's normal map
+    /// ([`World::camera_surface`]).
     #[must_use]
     pub fn surface(&self, hit: &crate::world::accel::Hit, origin: Vec3, dir: Vec3) -> SurfacePoint {
+        self.surface_with(hit, origin, dir, false)
+    }
+
+    /// The surface at `hit` seen along the unit direction `dir` from the camera: its shading
+    /// normal bent by the material's normal map, if any. Normal maps shade what the camera
+    /// sees; light paths keep the interpolated normals: a bent normal at a VPL would make it
+    /// light its own plane (a VPL on a normal-mapped floor emitting along the floor), whose
+    /// visibility is a ray grazing that plane (docs/design.md, "Normal maps").
+    #[must_use]
+    pub fn camera_surface(
+        &self,
+        hit: &crate::world::accel::Hit,
+        origin: Vec3,
+        dir: Vec3,
+    ) -> SurfacePoint {
+        self.surface_with(hit, origin, dir, true)
+    }
+
+    fn surface_with(
+        &self,
+        hit: &crate::world::accel::Hit,
+        origin: Vec3,
+        dir: Vec3,
+        bend: bool,
+    ) -> SurfacePoint {
         let t = hit.triangle as usize;
         let mesh = &self.scene.mesh;
         let [i0, i1, i2] = mesh.triangles[t].map(|i| i as usize);
@@ -238,6 +265,11 @@ impl World {
         }
         let uv: Vec2 = mesh.uvs[i0] * b0 + mesh.uvs[i1] * b1 + mesh.uvs[i2] * b2;
         let material = self.scene.material_of(t);
+        if bend && let Some(map) = &material.normal_map {
+            let corners = [i0, i1, i2].map(|i| mesh.positions[i]);
+            let uvs = [i0, i1, i2].map(|i| mesh.uvs[i]);
+            normal = map.bend(&self.scene.textures, uv, normal, geo_normal, corners, uvs);
+        }
         SurfacePoint {
             position: origin + dir * hit.t,
             geo_normal,
@@ -254,6 +286,15 @@ impl World {
         self.accel
             .intersect(origin, dir, f32::INFINITY)
             .map(|h| self.surface(&h, origin, dir))
+    }
+
+    /// Traces a camera ray from `origin` and returns the surface it sees, its normal bent by
+    /// the material's normal map ([`World::camera_surface`]).
+    #[must_use]
+    pub fn trace_camera(&self, origin: Vec3, dir: Vec3) -> Option<SurfacePoint> {
+        self.accel
+            .intersect(origin, dir, f32::INFINITY)
+            .map(|h| self.camera_surface(&h, origin, dir))
     }
 
     /// A ray origin just off the surface at `p` (geometric normal `n_geo`), on the side that

@@ -16,6 +16,7 @@ mod formats;
 mod hostile;
 mod ism;
 mod lgh_method;
+mod normal_maps;
 mod pt_method;
 mod ratio_filter;
 mod region;
