@@ -10,6 +10,35 @@ use lgh_render::{Component, RenderSettings, Silent, World, render_frame};
 
 mod common;
 
+/// The brute force, all light, at 64x36 with 2,000 VPLs.
+fn settings() -> RenderSettings {
+    RenderSettings {
+        method: BRUTE,
+        width: 64,
+        height: 36,
+        vpls: 2000,
+        component: Component::All,
+        ..RenderSettings::default()
+    }
+}
+
+/// `world`'s CPU frame of `s`, after checking that the GPU's is within rel_rmse 0.005 of
+/// it (`what` names the case).
+fn cpu_frame_equal_to_the_gpus(world: &World, s: &RenderSettings, what: &str) -> lgh_render::Image {
+    let cpu = render_frame(world, s, &Silent).expect("cpu").image;
+    let gpu_settings = RenderSettings {
+        method: lgh_gpu::brute::BRUTE_GPU,
+        ..s.clone()
+    };
+    let gpu = render_frame(world, &gpu_settings, &Silent)
+        .expect("gpu")
+        .image;
+    let m = diff(&gpu, &cpu).expect("same size");
+    eprintln!("{what}, brute, GPU against CPU: {m:?}");
+    assert!(m.rel_rmse <= 0.005, "{what}: {m:?}");
+    cpu
+}
+
 /// The brute force, all light (direct and indirect), on the GPU and on the CPU: within
 /// rel_rmse 0.005 (the area of the holes' edges where rounding decides the test differs
 /// by a few pixels' worth); without the cut-outs, or without the vertex colours, the
@@ -22,23 +51,8 @@ mod common;
 fn the_gpu_sees_through_the_holes_and_the_colours_as_the_cpu_does() {
     let w = common::world(Some("test/lattice.toml"));
     assert_eq!(w.cutouts.as_ref().map(|c| c.len()), Some(6));
-    let s = RenderSettings {
-        method: BRUTE,
-        width: 64,
-        height: 36,
-        vpls: 2000,
-        component: Component::All,
-        ..RenderSettings::default()
-    };
-    let cpu = render_frame(&w, &s, &Silent).expect("cpu").image;
-    let gpu_settings = RenderSettings {
-        method: lgh_gpu::brute::BRUTE_GPU,
-        ..s.clone()
-    };
-    let gpu = render_frame(&w, &gpu_settings, &Silent).expect("gpu").image;
-    let m = diff(&gpu, &cpu).expect("same size");
-    eprintln!("lattice, brute, GPU against CPU: {m:?}");
-    assert!(m.rel_rmse <= 0.005, "{m:?}");
+    let s = settings();
+    let cpu = cpu_frame_equal_to_the_gpus(&w, &s, "lattice");
     // The scene without its cut-outs: solid screens.
     let mut solid = w.scene.clone();
     for m in &mut solid.materials {
@@ -96,23 +110,8 @@ fn the_gpu_bends_the_normals_the_camera_sees_as_the_cpu_does() {
         }
     }
     let w = World::new(scene);
-    let s = RenderSettings {
-        method: BRUTE,
-        width: 64,
-        height: 36,
-        vpls: 2000,
-        component: Component::All,
-        ..RenderSettings::default()
-    };
-    let cpu = render_frame(&w, &s, &Silent).expect("cpu").image;
-    let gpu_settings = RenderSettings {
-        method: lgh_gpu::brute::BRUTE_GPU,
-        ..s.clone()
-    };
-    let gpu = render_frame(&w, &gpu_settings, &Silent).expect("gpu").image;
-    let m = diff(&gpu, &cpu).expect("same size");
-    eprintln!("normal-mapped lattice, brute, GPU against CPU: {m:?}");
-    assert!(m.rel_rmse <= 0.005, "{m:?}");
+    let s = settings();
+    let cpu = cpu_frame_equal_to_the_gpus(&w, &s, "normal-mapped lattice");
     let plain = render_frame(&flat, &s, &Silent).expect("cpu").image;
     let far = diff(&plain, &cpu).expect("same size");
     eprintln!("without the normal map against with: {far:?}");

@@ -70,27 +70,15 @@ fn covers(t: u32, b1: f32, b2: f32) -> bool {
         // Texture::alpha_at: bilinear, v up.
         let w = i32(bitcast<u32>(head.x));
         let h = i32(bitcast<u32>(head.y));
-        let wrap = bitcast<u32>(head.z);
         let first = bitcast<u32>(head.w);
-        let wu = wrap & 3u;
-        let wv = (wrap >> 2u) & 3u;
-        let x = wrap_coordinate(uv.x, wu) * f32(w) - 0.5;
-        let y = (1.0 - wrap_coordinate(uv.y, wv)) * f32(h) - 0.5;
-        let x0 = floor(x);
-        let y0 = floor(y);
-        let fx = x - x0;
-        let fy = y - y0;
-        let xa = wrap_texel(i32(x0), w, wu);
-        let xb = wrap_texel(i32(x0) + 1, w, wu);
-        let ya = wrap_texel(i32(y0), h, wv);
-        let yb = wrap_texel(i32(y0) + 1, h, wv);
-        let a00 = alpha_texel(first, u32(ya * w + xa));
-        let a01 = alpha_texel(first, u32(ya * w + xb));
-        let a10 = alpha_texel(first, u32(yb * w + xa));
-        let a11 = alpha_texel(first, u32(yb * w + xb));
-        let top = a00 + (a01 - a00) * fx;
-        let bottom = a10 + (a11 - a10) * fx;
-        alpha = (top + (bottom - top) * fy) / 255.0;
+        let b = bilinear(uv, w, h, bitcast<u32>(head.z));
+        let a00 = alpha_texel(first, b.i.x);
+        let a01 = alpha_texel(first, b.i.y);
+        let a10 = alpha_texel(first, b.i.z);
+        let a11 = alpha_texel(first, b.i.w);
+        let top = a00 + (a01 - a00) * b.f.x;
+        let bottom = a10 + (a11 - a10) * b.f.x;
+        alpha = (top + (bottom - top) * b.f.y) / 255.0;
     }
     return consts.x * alpha >= consts.y;
 }

@@ -75,3 +75,28 @@ fn wrap_texel(i: i32, n: i32, wrap: u32) -> i32 {
     }
     return clamp(i, 0, n - 1);
 }
+
+// The four texels around `uv` in a w x h texture, row-major indices (x0 y0, x1 y0, x0 y1,
+// x1 y1), and the bilinear weights (fx, fy): lgh-scene's Texture::bilinear, v up, `wrap`
+// in u | in v << 2.
+struct Bilinear {
+    i: vec4<u32>,
+    f: vec2<f32>,
+}
+
+fn bilinear(uv: vec2<f32>, w: i32, h: i32, wrap: u32) -> Bilinear {
+    let wu = wrap & 3u;
+    let wv = (wrap >> 2u) & 3u;
+    let x = wrap_coordinate(uv.x, wu) * f32(w) - 0.5;
+    let y = (1.0 - wrap_coordinate(uv.y, wv)) * f32(h) - 0.5;
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let xa = wrap_texel(i32(x0), w, wu);
+    let xb = wrap_texel(i32(x0) + 1, w, wu);
+    let ya = wrap_texel(i32(y0), h, wv);
+    let yb = wrap_texel(i32(y0) + 1, h, wv);
+    return Bilinear(
+        vec4<u32>(u32(ya * w + xa), u32(ya * w + xb), u32(yb * w + xa), u32(yb * w + xb)),
+        vec2<f32>(x - x0, y - y0),
+    );
+}

@@ -73,21 +73,10 @@ fn sample_texture(k: u32, uv: vec2<f32>, wrap: u32) -> vec3<f32> {
     let w = i32(texels[head + 1u]);
     let h = i32(texels[head + 2u]);
     let linear = texels[head + 3u] != 0u;
-    let wu = wrap & 3u;
-    let wv = (wrap >> 2u) & 3u;
-    let x = wrap_coordinate(uv.x, wu) * f32(w) - 0.5;
-    let y = (1.0 - wrap_coordinate(uv.y, wv)) * f32(h) - 0.5;
-    let x0 = floor(x);
-    let y0 = floor(y);
-    let fx = x - x0;
-    let fy = y - y0;
-    let xa = wrap_texel(i32(x0), w, wu);
-    let xb = wrap_texel(i32(x0) + 1, w, wu);
-    let ya = wrap_texel(i32(y0), h, wv);
-    let yb = wrap_texel(i32(y0) + 1, h, wv);
-    let top = lerp3(texel(first + u32(ya * w + xa), linear), texel(first + u32(ya * w + xb), linear), fx);
-    let bottom = lerp3(texel(first + u32(yb * w + xa), linear), texel(first + u32(yb * w + xb), linear), fx);
-    return lerp3(top, bottom, fy);
+    let b = bilinear(uv, w, h, wrap);
+    let top = lerp3(texel(first + b.i.x, linear), texel(first + b.i.y, linear), b.f.x);
+    let bottom = lerp3(texel(first + b.i.z, linear), texel(first + b.i.w, linear), b.f.x);
+    return lerp3(top, bottom, b.f.y);
 }
 
 // glam's normalize_or_zero.
