@@ -212,6 +212,25 @@ mod tests {
         );
     }
 
+    /// A `map_d` whose file is missing leaves the surface opaque, and the warning says so.
+    #[test]
+    fn a_missing_mask_is_a_warning_and_no_cut_out() {
+        let d = std::env::temp_dir().join(format!("lgh-missing-mask-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        std::fs::write(d.join("m.mtl"), "newmtl a\nmap_d gone.png\n").unwrap();
+        let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
+        std::fs::write(d.join("s.obj"), obj).unwrap();
+        let scene = crate::obj::load(&d.join("s.obj")).unwrap();
+        let _ = std::fs::remove_dir_all(&d);
+        assert_eq!(scene.materials[0].cutout, None);
+        let w = &scene.report.warnings;
+        assert!(
+            w.iter()
+                .any(|w| w.contains("gone.png") && w.contains("no cut-out")),
+            "{w:?}"
+        );
+    }
+
     /// The project's lattice scene (OBJ `map_d` of an RGBA PNG, one with `-s 2 2`): its
     /// screens are cut where the texture's alpha is 0, the standing one at twice the
     /// frequency, and its floor and walls are opaque.

@@ -315,12 +315,15 @@ impl TextureFiles {
     /// The colour texture at `path` (`map_Kd`, `map_Ke`), added to `scene`; `None` with a
     /// warning if it cannot be read; an error if it is over the budget.
     fn colour(&mut self, scene: &mut Scene, path: &Path) -> Result<Option<u32>, SceneError> {
+        let decode = TexelBudget::decode_file;
+        let without = "using the material colour";
         load_texture(
             scene,
             &mut self.budget,
             &mut self.colour,
             path,
-            TexelBudget::decode_file,
+            decode,
+            without,
         )
     }
 
@@ -336,18 +339,27 @@ impl TextureFiles {
             return Ok(Some(i));
         }
         let decode = TexelBudget::decode_mask_file;
-        load_texture(scene, &mut self.budget, &mut self.mask, path, decode)
+        let without = "the surface has no cut-out";
+        load_texture(
+            scene,
+            &mut self.budget,
+            &mut self.mask,
+            path,
+            decode,
+            without,
+        )
     }
 }
 
 /// The texture at `path`, decoded by `decode` the first time (`loaded` remembers it) and
-/// added to `scene`.
+/// added to `scene`; if it cannot be read, a warning that says what happens `without` it.
 fn load_texture(
     scene: &mut Scene,
     budget: &mut TexelBudget,
     loaded: &mut HashMap<PathBuf, u32>,
     path: &Path,
     decode: fn(&mut TexelBudget, &Path) -> Result<Texture, TextureError>,
+    without: &str,
 ) -> Result<Option<u32>, SceneError> {
     if let Some(&i) = loaded.get(path) {
         return Ok(Some(i));
@@ -362,7 +374,7 @@ fn load_texture(
         Err(TextureError::OverBudget(e)) => Err(SceneError::new(path, e)),
         Err(e) => {
             scene.report.warnings.push(format!(
-                "texture {} not loaded ({e}); using the material colour",
+                "texture {} not loaded ({e}); {without}",
                 path.display()
             ));
             Ok(None)
