@@ -51,7 +51,7 @@ pub(crate) fn append(tris: &mut Vec<Vec4>, order: &[u32], cutouts: &Cutouts) {
             let tex = &cutouts.textures()[t as usize];
             (tex.width, tex.height, texel_slot[t as usize])
         });
-        let wrap = c.wrap[0].code() | c.wrap[1].code() << 2;
+        let wrap = lgh_scene::texture::Wrap::pair_code(c.wrap);
         tris.push(Vec4::new(bits(w), bits(h), bits(wrap), bits(first)));
         let textured = if texture.is_some() { 1.0 } else { 0.0 };
         tris.push(Vec4::new(c.factor, c.cutoff, textured, 0.0));

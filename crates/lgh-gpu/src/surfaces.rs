@@ -153,7 +153,7 @@ fn materials(scene: &lgh_scene::Scene) -> Vec<GpuMaterial> {
                 .albedo_texture
                 .filter(|&k| (k as usize) < scene.textures.len())
                 .unwrap_or(NO_TEXTURE);
-            let wrap = |w: [lgh_scene::texture::Wrap; 2]| w[0].code() | w[1].code() << 2;
+            let wrap = lgh_scene::texture::Wrap::pair_code;
             let normal = m
                 .normal_map
                 .filter(|n| (n.texture as usize) < scene.textures.len())

@@ -97,6 +97,12 @@ impl Wrap {
     pub fn code(self) -> u32 {
         self as u32
     }
+
+    /// The wraps of u and v in one GPU word: u | v << 2 (`common.wgsl`'s `bilinear`).
+    #[must_use]
+    pub fn pair_code([u, v]: [Self; 2]) -> u32 {
+        u.code() | v.code() << 2
+    }
 }
 
 impl Texture {
