@@ -57,10 +57,41 @@ fn describe(e: &gltf::Error) -> String {
     format!("invalid glTF: {}", line.join("; "))
 }
 
+/// Parses and validates a glTF file as `gltf::Gltf::from_slice` does, except that POSITION
+/// accessors without their `min` and `max` are read, with a warning (the second value),
+/// instead of refused: glTF 2.0 requires them, some exporters leave them out, and lgh
+/// computes its own bounds.
+fn parse(bytes: &[u8]) -> Result<(gltf::Gltf, Option<String>), gltf::Error> {
+    use gltf::json::validation::{Error as Problem, Validate};
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes)?;
+    let root = gltf.document.as_json();
+    let mut problems = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, problem| {
+        problems.push((path(), problem));
+    });
+    let bound = |path: &gltf::json::Path| {
+        let p = path.as_str();
+        p.ends_with(r#""POSITION"].min"#) || p.ends_with(r#""POSITION"].max"#)
+    };
+    let (bounds, others): (Vec<_>, Vec<_>) = problems
+        .into_iter()
+        .partition(|(path, problem)| matches!(problem, Problem::Missing) && bound(path));
+    if !others.is_empty() {
+        return Err(gltf::Error::Validation(others));
+    }
+    let warning = (!bounds.is_empty()).then(|| {
+        format!(
+            "{} POSITION attributes lack the min and max that glTF 2.0 requires; read anyway",
+            bounds.len().div_ceil(2)
+        )
+    });
+    Ok((gltf, warning))
+}
+
 /// Reads `path` as described in the module documentation.
 pub(crate) fn import(path: &Path) -> Result<Import, SceneError> {
     let bytes = read_capped(path, MAX_GLTF_BYTES, "glTF file")?;
-    let gltf::Gltf { document, mut blob } = gltf::Gltf::from_slice(&bytes).map_err(|e| {
+    let (gltf::Gltf { document, mut blob }, bounds_warning) = parse(&bytes).map_err(|e| {
         let message = match crate::gltf_file::old_version(&bytes) {
             Some(v) => format!("glTF {v} is not supported (lgh reads glTF 2.0)"),
             None => format!("cannot load glTF: {}", describe(&e)),
@@ -105,7 +136,7 @@ pub(crate) fn import(path: &Path) -> Result<Import, SceneError> {
     }
     let mut budget = TexelBudget::default();
     let mut textures = Vec::new();
-    let mut warnings = Vec::new();
+    let mut warnings: Vec<String> = bounds_warning.into_iter().collect();
     for img in document.images() {
         let decoded = match img.source() {
             gltf::image::Source::View { view, .. } => {
@@ -248,5 +279,65 @@ mod describe_tests {
         assert!(line.contains("KHR_draco_mesh_compression"), "{line}");
         assert!(line.contains("more") && line.len() < 300, "{line}");
         assert!(!line.contains('\n'));
+    }
+}
+
+#[cfg(test)]
+mod bounds_tests {
+    use super::*;
+
+    /// A one-triangle glTF whose POSITION accessor has `bounds` (JSON members, maybe none)
+    /// and whose index accessor has `count`.
+    fn triangle(bounds: &str, index_count: u32) -> String {
+        let f32s = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+        let mut bin: Vec<u8> = f32s.iter().flat_map(|x| x.to_le_bytes()).collect();
+        bin.extend([0u16, 1, 2, 0].iter().flat_map(|i| i.to_le_bytes()));
+        let data = base64::engine::general_purpose::STANDARD.encode(&bin);
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+"buffers":[{{"uri":"data:application/octet-stream;base64,{data}","byteLength":{}}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":8}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"{bounds}}},
+  {{"bufferView":{index_count},"componentType":5123,"count":3,"type":"SCALAR"}}]}}"#,
+            bin.len()
+        )
+    }
+
+    /// POSITION without min and max (which some exporters leave out) is read with one
+    /// warning; with them there is none; any other problem is still refused, and named.
+    #[test]
+    fn positions_without_bounds_are_read_with_a_warning() {
+        let with = triangle(r#","min":[0,0,0],"max":[1,1,0]"#, 1);
+        let (_, warning) = parse(with.as_bytes()).unwrap();
+        assert_eq!(warning, None);
+        let (gltf, warning) = parse(triangle("", 1).as_bytes()).unwrap();
+        let warning = warning.expect("a warning");
+        assert!(warning.starts_with("1 POSITION attributes lack"), "{warning}");
+        assert_eq!(gltf.document.meshes().count(), 1);
+        // A second problem (the index accessor's buffer view does not exist) is refused.
+        let Err(e) = parse(triangle("", 9).as_bytes()) else {
+            panic!("loaded");
+        };
+        let line = describe(&e);
+        assert!(line.contains("bufferView") && !line.contains("POSITION"), "{line}");
+    }
+
+    /// Through the loader: the triangle is there and the warning is the scene's.
+    #[test]
+    fn the_loader_reports_the_warning() {
+        let dir = std::env::temp_dir().join(format!("lgh-bounds-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("t.gltf");
+        std::fs::write(&path, triangle("", 1)).unwrap();
+        let scene = crate::gltf_file::load(&path);
+        let _ = std::fs::remove_dir_all(&dir);
+        let scene = scene.unwrap();
+        assert_eq!(scene.mesh.len(), 1);
+        assert!(
+            scene.report.warnings.iter().any(|w| w.contains("lack the min and max")),
+            "{:?}",
+            scene.report.warnings
+        );
     }
 }
