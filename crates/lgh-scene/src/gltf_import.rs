@@ -313,14 +313,20 @@ mod bounds_tests {
         assert_eq!(warning, None);
         let (gltf, warning) = parse(triangle("", 1).as_bytes()).unwrap();
         let warning = warning.expect("a warning");
-        assert!(warning.starts_with("1 POSITION attributes lack"), "{warning}");
+        assert!(
+            warning.starts_with("1 POSITION attributes lack"),
+            "{warning}"
+        );
         assert_eq!(gltf.document.meshes().count(), 1);
         // A second problem (the index accessor's buffer view does not exist) is refused.
         let Err(e) = parse(triangle("", 9).as_bytes()) else {
             panic!("loaded");
         };
         let line = describe(&e);
-        assert!(line.contains("bufferView") && !line.contains("POSITION"), "{line}");
+        assert!(
+            line.contains("bufferView") && !line.contains("POSITION"),
+            "{line}"
+        );
     }
 
     /// Through the loader: the triangle is there and the warning is the scene's.
@@ -335,7 +341,11 @@ mod bounds_tests {
         let scene = scene.unwrap();
         assert_eq!(scene.mesh.len(), 1);
         assert!(
-            scene.report.warnings.iter().any(|w| w.contains("lack the min and max")),
+            scene
+                .report
+                .warnings
+                .iter()
+                .any(|w| w.contains("lack the min and max")),
             "{:?}",
             scene.report.warnings
         );

@@ -236,7 +236,12 @@ impl Scene {
                 front * turn.cos() * raise.cos(),
             )
         };
-        let views = [view(1.0, 1.0), view(-1.0, 1.0), view(1.0, -1.0), view(-1.0, -1.0)];
+        let views = [
+            view(1.0, 1.0),
+            view(-1.0, 1.0),
+            view(1.0, -1.0),
+            view(-1.0, -1.0),
+        ];
         // Twice the projected area of the (two-sided) triangles seen along each view.
         let mut seen = [0.0f32; 4];
         for t in 0..self.mesh.len() {

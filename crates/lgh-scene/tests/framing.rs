@@ -45,7 +45,10 @@ fn a_flat_mesh_is_never_seen_edge_on() {
         let half = (camera.fov_y_degrees.to_radians() * 0.5).cos();
         for &p in &scene.mesh.positions {
             let to = (p - camera.position).normalize();
-            assert!(to.dot(view) >= half - 1e-5, "axis {axis}: corner {p} out of view");
+            assert!(
+                to.dot(view) >= half - 1e-5,
+                "axis {axis}: corner {p} out of view"
+            );
         }
     }
 }

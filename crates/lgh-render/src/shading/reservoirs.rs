@@ -226,7 +226,7 @@ pub fn pass_over(res: &mut [Reservoir<ShadowSample>], sum: f32) -> bool {
 /// total reaches t_i = (i + u_i) / k * F, u_i = `u(i)` uniform in [0, 1) (independent
 /// numbers, or the screen's dithered strata of [`crate::shading::strata`]), F = sum of
 /// f_j. The lights come in
-/// chunks of `N`: `chunk_weights[c]` is the (sequential) sum of chunk c's weights, and
+/// chunks of `N`: `chunk_weights[c]` is the sum of chunk c's weights (in any order), and
 /// `lanes(c)` evaluates the chunk again, giving its lights' weights and a payload for
 /// `take(i, lane, &payload, f_j, F)`, called once per sample in order of i.
 ///

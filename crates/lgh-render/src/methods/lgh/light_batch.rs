@@ -81,6 +81,18 @@ pub struct LaneResult {
     pub lum: [f32; LANES],
 }
 
+/// The sum of a chunk's lanes as a tree: lane l + lane l + 4, then + 2, then + 1, which the
+/// compiler does in vector registers (halves, quarters, pairs). A sequential sum is seven
+/// dependent scalar adds of values read back from memory, which the lighting loop waited on
+/// once per chunk (a quarter of its time in a profile of Sponza at 80K VPLs).
+#[inline(always)]
+#[must_use]
+pub fn lane_sum(v: &[f32; LANES]) -> f32 {
+    let half = [v[0] + v[4], v[1] + v[5], v[2] + v[6], v[3] + v[7]];
+    let quarter = [half[0] + half[2], half[1] + half[3]];
+    quarter[0] + quarter[1]
+}
+
 impl LightBatch {
     /// Number of lights (without padding).
     #[must_use]

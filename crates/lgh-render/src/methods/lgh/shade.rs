@@ -10,7 +10,7 @@ use lgh_core::rng::Rng;
 use lgh_core::sampling::raised_cosine;
 use lgh_core::vpl::light_irradiance;
 
-use crate::methods::lgh::light_batch::{LANES, LaneResult, LightBatch, PackedLight};
+use crate::methods::lgh::light_batch::{LANES, LaneResult, LightBatch, PackedLight, lane_sum};
 use crate::methods::lgh::lights::ShadeLights;
 use crate::methods::lgh::settings::{JitterAt, LghSettings};
 use crate::passes::gbuffer::GBuffer;
@@ -185,7 +185,7 @@ fn guest_sum(batch: &LightBatch, g: &GBuffer, i: usize, eps2: f32) -> Vec3 {
     for chunk in 0..batch.chunks() {
         add_lanes(&mut sum, &batch.eval(chunk, xp, n, eps2).value);
     }
-    Vec3::from(sum.map(|s| s.iter().sum::<f32>()))
+    Vec3::from(sum.map(|s| lane_sum(&s)))
 }
 
 /// Adds a chunk's lane values (RGB planes) to `sum`, lane by lane.
@@ -243,30 +243,64 @@ fn shade_pixel(
         batch.fill(key, packed, bins.lights_at(x as u32, y as u32));
     }
     let batch = &*batch;
-    chunk_weights.clear();
-    chunk_lanes.clear();
     // A summed lane by lane over the chunks, reduced once per pixel.
     let mut sum = [[0.0f32; LANES]; 3];
-    for chunk in 0..batch.chunks() {
-        let lanes = batch.eval(chunk, xp, n, eps2);
-        *overdraw += lanes.reached.iter().map(|&r| u32::from(r)).sum::<u32>();
-        add_lanes(&mut sum, &lanes.value);
+    let chunks = batch.chunks();
+    if stratified {
+        // Each chunk's selection weights f_j (zero below the first candidate level) and
+        // their sum are kept; the samples are drawn after the loop. The scratch arrays
+        // only grow: every entry below `chunks` is written before the picks read it, and
+        // writing through slices keeps their lengths out of the loop.
+        if chunk_lanes.len() < chunks {
+            chunk_lanes.resize(chunks, ([0.0; LANES], [[0.0; LANES]; 3]));
+            chunk_weights.resize(chunks, 0.0);
+        }
+        let kept = chunk_weights[..chunks]
+            .iter_mut()
+            .zip(&mut chunk_lanes[..chunks]);
+        for (chunk, (weight, lanes_kept)) in kept.enumerate() {
+            let lanes = shade_chunk(batch, chunk, (xp, n, eps2), overdraw, &mut sum);
+            let lum = candidate_weights(batch, chunk, &lanes, candidates_from);
+            *weight = lane_sum(&lum);
+            *lanes_kept = (lum, lanes.value);
+        }
+        *a += Vec3::from(sum.map(|s| lane_sum(&s)));
+        let lanes = |c: usize| {
+            let (lum, value) = chunk_lanes[c];
+            (lum, (c, value))
+        };
+        let take = |slot: usize, lane: usize, &(c, value): &ChunkValues, f, total| {
+            let j = batch.index[c * LANES + lane] as usize;
+            let bc = Vec3::new(value[0][lane], value[1][lane], value[2][lane]);
+            res[slot] = Reservoir {
+                total,
+                weight: f,
+                sample: Some(ctx.ray_sample(j, bc)),
+                threshold: 0.0,
+            };
+        };
+        let weights = &chunk_weights[..chunks];
+        match ctx.strata {
+            Some(strata) => {
+                let px = strata.pixel(x as u32, y as u32);
+                stratified_picks(weights, lanes, k, |i| px.u(i), take);
+            }
+            None => stratified_picks(weights, lanes, k, |_| rng.next_f32(), take),
+        }
+        return;
+    }
+    for chunk in 0..chunks {
+        let lanes = shade_chunk(batch, chunk, (xp, n, eps2), overdraw, &mut sum);
         if k == 0 {
             continue;
         }
         // The selection weights f_j of the chunk's candidates (zero below the first
-        // candidate level). Stratified: only the chunk's sum is kept, the samples are
-        // drawn after the loop. Streaming: when no reservoir's replacement threshold is
+        // candidate level). Streaming: when no reservoir's replacement threshold is
         // reached by the chunk's total, none takes any of its lights: the totals grow by
         // the sum and the lights are passed over without a look (the common case once
         // the reservoirs hold a sample; Reservoir::update_jump).
         let lum = candidate_weights(batch, chunk, &lanes, candidates_from);
-        if stratified {
-            chunk_weights.push(lum.iter().sum());
-            chunk_lanes.push((lum, lanes.value));
-            continue;
-        }
-        if settings.jitter == JitterAt::Ray && pass_over(res, lum.iter().sum()) {
+        if settings.jitter == JitterAt::Ray && pass_over(res, lane_sum(&lum)) {
             continue;
         }
         for (lane, &f) in lum.iter().enumerate() {
@@ -322,28 +356,21 @@ fn shade_pixel(
             offer(res, || sample, luminance(sample.f), &mut rng);
         }
     }
-    *a += Vec3::from(sum.map(|s| s.iter().sum::<f32>()));
-    if stratified {
-        let lanes = |c: usize| {
-            let (lum, value) = chunk_lanes[c];
-            (lum, (c, value))
-        };
-        let take = |slot: usize, lane: usize, &(c, value): &ChunkValues, f, total| {
-            let j = batch.index[c * LANES + lane] as usize;
-            let bc = Vec3::new(value[0][lane], value[1][lane], value[2][lane]);
-            res[slot] = Reservoir {
-                total,
-                weight: f,
-                sample: Some(ctx.ray_sample(j, bc)),
-                threshold: 0.0,
-            };
-        };
-        match ctx.strata {
-            Some(strata) => {
-                let px = strata.pixel(x as u32, y as u32);
-                stratified_picks(chunk_weights, lanes, k, |i| px.u(i), take);
-            }
-            None => stratified_picks(chunk_weights, lanes, k, |_| rng.next_f32(), take),
-        }
-    }
+    *a += Vec3::from(sum.map(|s| lane_sum(&s)));
+}
+
+/// Evaluates chunk `chunk` of `batch` at the pixel (position, normal, eps^2): adds the
+/// lights it reaches to `overdraw` and B_l(d) f_j to `sum`, lane by lane.
+#[inline(always)]
+fn shade_chunk(
+    batch: &LightBatch,
+    chunk: usize,
+    (xp, n, eps2): (Vec3, Vec3, f32),
+    overdraw: &mut u32,
+    sum: &mut [[f32; LANES]; 3],
+) -> LaneResult {
+    let lanes = batch.eval(chunk, xp, n, eps2);
+    *overdraw += lanes.reached.iter().map(|&r| u32::from(r)).sum::<u32>();
+    add_lanes(sum, &lanes.value);
+    lanes
 }
