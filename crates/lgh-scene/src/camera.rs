@@ -2,6 +2,10 @@
 
 use glam::{Vec2, Vec3};
 
+/// The vertical field of view, in degrees, of a camera that does not give one: a scene
+/// file's `[camera]` without `fov`, and the camera that frames a scene without any.
+pub const DEFAULT_FOV_DEGREES: f32 = 45.0;
+
 /// Pinhole camera: position, the point it looks at, the up vector and the vertical field of
 /// view in degrees. The image's aspect ratio comes from the render size.
 #[derive(Clone, Debug, PartialEq)]

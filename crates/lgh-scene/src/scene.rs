@@ -217,8 +217,9 @@ impl Scene {
     }
 
     /// A camera looking at the centre of the bounds from a three-quarter view, far enough
-    /// back that the bounding sphere fits a 45-degree vertical field of view: from the front
-    /// (+z, glTF's front) turned 30 degrees to the right (+x) and raised 20 degrees (+y, up),
+    /// back that the bounding sphere fits the default vertical field of view (45 degrees):
+    /// from the front (+z, glTF's front) turned 30 degrees to the right (+x) and raised 20
+    /// degrees (+y, up),
     /// unless one of the three other such views (from the left, or from behind) sees more
     /// than 1.5 times its projected area. Straight from +z, a mesh flat in x or y is seen
     /// edge on (a black image, and the light added at the camera makes no VPL); of the four
@@ -226,7 +227,7 @@ impl Scene {
     #[must_use]
     pub fn framing_camera(&self) -> Camera {
         let (c, r) = self.bounding_sphere();
-        let fov = 45.0f32;
+        let fov = crate::camera::DEFAULT_FOV_DEGREES;
         let dist = r / (fov.to_radians() * 0.5).sin();
         let (turn, raise) = (30.0f32.to_radians(), 20.0f32.to_radians());
         let view = |right: f32, front: f32| {

@@ -9,7 +9,7 @@
 //! position = [-13.0, 2.0, -0.5]
 //! look_at = [10.0, 5.0, 0.5]
 //! up = [0.0, 1.0, 0.0]         # optional, default +y
-//! fov = 60.0                   # vertical, degrees
+//! fov = 60.0                   # optional, vertical, degrees; default 45
 //!
 //! [[lights]]
 //! type = "directional"         # point | spot | directional
@@ -102,7 +102,7 @@ struct CameraDesc {
     position: [f32; 3],
     look_at: [f32; 3],
     up: Option<[f32; 3]>,
-    fov: f32,
+    fov: Option<f32>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -324,7 +324,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
             position: c.position.into(),
             look_at: c.look_at.into(),
             up: c.up.map_or(Vec3::Y, Vec3::from),
-            fov_y_degrees: c.fov,
+            fov_y_degrees: c.fov.unwrap_or(crate::camera::DEFAULT_FOV_DEGREES),
         });
     }
     for (k, light) in desc.lights.iter().enumerate() {
@@ -402,6 +402,19 @@ mod tests {
                 intensity: Vec3::ONE
             }
         );
+    }
+
+    /// A `[camera]` may leave out `fov` (and `up`): 45 degrees and +y.
+    #[test]
+    fn a_camera_without_fov_takes_the_default() {
+        let path = write_scene(
+            "fov",
+            "[camera]\nposition = [0.5, 3.0, 2.0]\nlook_at = [0.5, 0.0, 0.5]\n",
+        );
+        let camera = load(&path).unwrap().camera();
+        assert_eq!(camera.fov_y_degrees, crate::camera::DEFAULT_FOV_DEGREES);
+        assert_eq!(camera.up, Vec3::Y);
+        assert_eq!(camera.position, Vec3::new(0.5, 3.0, 2.0));
     }
 
     #[test]
