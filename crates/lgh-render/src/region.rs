@@ -169,7 +169,12 @@ pub fn guard_band(s: &crate::RenderSettings) -> u32 {
     } else {
         return 9;
     };
-    let atrous = 2 * ((1u32 << s.shadows.filter_passes.min(16)) - 1);
+    let atrous = 2
+        * ((1u32
+            << s.shadows
+                .filter_passes
+                .min(crate::denoise::atrous::MAX_PASSES))
+            - 1);
     atrous
         .saturating_add(s.tiling.blur.radius)
         .saturating_add(tile)

@@ -74,7 +74,7 @@ pub struct ShadowSettings {
     /// lgh, slc: filter applied to the shadow estimates.
     #[cfg_attr(feature = "clap", arg(long, value_enum, default_value_t = ShadowSettings::default().filter))]
     pub filter: ShadowFilter,
-    /// lgh, slc: a-trous passes.
+    /// lgh, slc: a-trous passes (0 to 12; pass i steps 2^i pixels).
     #[cfg_attr(feature = "clap", arg(long, default_value_t = ShadowSettings::default().filter_passes))]
     pub filter_passes: u32,
     /// lgh, slc: the a-trous filter's colour weight c_phi of its first pass (Dammertz et al.
@@ -508,6 +508,12 @@ impl RenderSettings {
             1,
             crate::methods::brute::sampled::MAX_BRUTE_RAYS,
         )?;
+        in_range(
+            "filter-passes",
+            self.shadows.filter_passes,
+            0,
+            crate::denoise::atrous::MAX_PASSES,
+        )?;
         in_range("area-samples", self.area_samples, 0, MAX_AREA_SAMPLES)?;
         in_range("bounces", self.bounces, 0, MAX_BOUNCES)?;
         in_range(
@@ -582,6 +588,12 @@ mod tests {
         let mut s = RenderSettings::default();
         s.tiling.interleave = Some(0);
         assert_eq!(s.validate().unwrap_err().name, "interleave");
+        let mut s = RenderSettings::default();
+        s.shadows.filter_passes = 13;
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "--filter-passes 13: expected 0 to 12"
+        );
         let s = RenderSettings {
             width: 0,
             ..RenderSettings::default()

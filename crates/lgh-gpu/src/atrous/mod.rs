@@ -59,7 +59,7 @@ pub(crate) fn record(
     pair: [&Lease<'_>; 2],
     params: &AtrousParams,
 ) -> Result<usize, GpuError> {
-    let passes = params.passes.min(12) as usize;
+    let passes = params.passes.min(lgh_render::denoise::atrous::MAX_PASSES) as usize;
     let pipeline = ctx.pipeline("atrous", source);
     let (width, height) = geo.size;
     for pass in 0..passes {

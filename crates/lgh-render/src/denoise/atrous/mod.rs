@@ -31,10 +31,14 @@ use rayon::prelude::*;
 
 use crate::passes::gbuffer::GBuffer;
 
+/// The most passes the filter runs (a step of 2^11 pixels: wider than any image lgh
+/// renders); `--filter-passes` refuses more.
+pub const MAX_PASSES: u32 = 12;
+
 /// Parameters of the filter.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AtrousParams {
-    /// Number of passes (step widths 1, 2, 4, ...).
+    /// Number of passes (step widths 1, 2, 4, ...), at most [`MAX_PASSES`].
     pub passes: u32,
     /// Colour (guide) weight parameter c_phi = sigma_c^2 of the first pass.
     pub c_phi: f32,
@@ -229,7 +233,7 @@ pub fn filter_ratio_pair_in_place(
     buffers: &mut AtrousBuffers,
 ) {
     let (w, h) = (g.width as usize, g.height as usize);
-    let passes = params.passes.min(12);
+    let passes = params.passes.min(MAX_PASSES);
     let pad = 2 << passes.saturating_sub(1);
     let layout = Layout {
         stride: pad + w.div_ceil(LANES) * LANES + pad,
