@@ -53,7 +53,7 @@ pub struct ViewArgs {
     /// Start with temporal filtering of the shadows (T toggles it).
     #[arg(long)]
     pub taa: bool,
-    /// Quit after N frames (at most a million).
+    /// Quit after N frames (1 to a million).
     #[arg(long)]
     pub frames: Option<u64>,
     /// Write the last frame shown to this PNG at exit.
@@ -149,9 +149,9 @@ impl ViewArgs {
     /// The first bad flag, named.
     pub fn check(&self) -> anyhow::Result<()> {
         if let Some(n) = self.frames
-            && n > MAX_FRAMES
+            && !(1..=MAX_FRAMES).contains(&n)
         {
-            anyhow::bail!("--frames {n}: at most {MAX_FRAMES}");
+            anyhow::bail!("--frames {n}: expected 1 to {MAX_FRAMES}");
         }
         if !self.light_speed.is_finite() || self.light_speed.abs() > 360.0 {
             anyhow::bail!(

@@ -175,8 +175,10 @@ fn viewer_flags_are_checked() {
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     assert_error(
         &v(&["--frames", "10000000"]),
-        &["--frames 10000000", "at most"],
+        &["--frames 10000000", "expected 1 to"],
     );
+    // No frame: nothing to show, to screenshot or to measure.
+    assert_error(&v(&["--frames", "0"]), &["--frames 0", "expected 1 to"]);
     for bad in ["nan", "inf", "1000"] {
         assert_error(
             &v(&["--frames", "1", "--light-speed", bad]),
