@@ -287,8 +287,8 @@ mod bounds_tests {
     use super::*;
 
     /// A one-triangle glTF whose POSITION accessor has `bounds` (JSON members, maybe none)
-    /// and whose index accessor has `count`.
-    fn triangle(bounds: &str, index_count: u32) -> String {
+    /// and whose index accessor reads buffer view `index_view` (1 exists, others do not).
+    fn triangle(bounds: &str, index_view: u32) -> String {
         let f32s = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
         let mut bin: Vec<u8> = f32s.iter().flat_map(|x| x.to_le_bytes()).collect();
         bin.extend([0u16, 1, 2, 0].iter().flat_map(|i| i.to_le_bytes()));
@@ -299,7 +299,7 @@ mod bounds_tests {
 "buffers":[{{"uri":"data:application/octet-stream;base64,{data}","byteLength":{}}}],
 "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":8}}],
 "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"{bounds}}},
-  {{"bufferView":{index_count},"componentType":5123,"count":3,"type":"SCALAR"}}]}}"#,
+  {{"bufferView":{index_view},"componentType":5123,"count":3,"type":"SCALAR"}}]}}"#,
             bin.len()
         )
     }

@@ -219,11 +219,10 @@ impl Scene {
     /// A camera looking at the centre of the bounds from a three-quarter view, far enough
     /// back that the bounding sphere fits the default vertical field of view (45 degrees):
     /// from the front (+z, glTF's front) turned 30 degrees to the right (+x) and raised 20
-    /// degrees (+y, up),
-    /// unless one of the three other such views (from the left, or from behind) sees more
-    /// than 1.5 times its projected area. Straight from +z, a mesh flat in x or y is seen
-    /// edge on (a black image, and the light added at the camera makes no VPL); of the four
-    /// views one sees any flat mesh at a cosine of at least 0.34.
+    /// degrees (+y, up), unless one of the three other such views (from the left, or from
+    /// behind) sees more than 1.5 times its projected area. Straight from +z, a mesh flat in
+    /// x or y is seen edge on (a black image, and the light added at the camera makes no
+    /// VPL); of the four views one sees any flat mesh at a cosine of at least 0.34.
     #[must_use]
     pub fn framing_camera(&self) -> Camera {
         let (c, r) = self.bounding_sphere();
