@@ -3,30 +3,33 @@
 
 use glam::Vec3;
 
-/// A unit square in the plane through the origin normal to `axis` (0 = x, 1 = y, 2 = z), as
-/// an OBJ file loaded into a scene.
-fn square(axis: usize) -> lgh_scene::Scene {
-    let corner = |a: f32, b: f32| {
-        let mut p = [0.0f32; 3];
-        p[(axis + 1) % 3] = a;
-        p[(axis + 2) % 3] = b;
-        format!("v {} {} {}\n", p[0], p[1], p[2])
-    };
-    let obj = [
-        corner(0.0, 0.0),
-        corner(1.0, 0.0),
-        corner(1.0, 1.0),
-        corner(0.0, 1.0),
-    ]
-    .concat()
+/// The quadrilateral `corners` as an OBJ file (named `name` in a temporary folder) loaded
+/// into a scene.
+fn quad(name: &str, corners: [Vec3; 4]) -> lgh_scene::Scene {
+    let obj = corners
+        .iter()
+        .map(|p| format!("v {} {} {}\n", p.x, p.y, p.z))
+        .collect::<String>()
         + "f 1 2 3 4\n";
-    let dir = std::env::temp_dir().join(format!("lgh-framing-{axis}-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("lgh-framing-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("square.obj");
+    let path = dir.join("quad.obj");
     std::fs::write(&path, obj).unwrap();
     let scene = lgh_scene::obj::load(&path);
     let _ = std::fs::remove_dir_all(&dir);
     scene.unwrap()
+}
+
+/// A unit square in the plane through the origin normal to `axis` (0 = x, 1 = y, 2 = z).
+fn square(axis: usize) -> lgh_scene::Scene {
+    let corner = |a: f32, b: f32| {
+        let mut p = Vec3::ZERO;
+        p[(axis + 1) % 3] = a;
+        p[(axis + 2) % 3] = b;
+        p
+    };
+    let corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].map(|(a, b)| corner(a, b));
+    quad(&format!("axis-{axis}"), corners)
 }
 
 #[test]
@@ -66,18 +69,7 @@ fn a_tilted_flat_mesh_is_framed_from_the_view_that_sees_it() {
     );
     let u = first;
     let v = first.cross(Vec3::Y).normalize();
-    let obj = [Vec3::ZERO, u, u + v, v]
-        .iter()
-        .map(|p| format!("v {} {} {}\n", p.x, p.y, p.z))
-        .collect::<String>()
-        + "f 1 2 3 4\n";
-    let dir = std::env::temp_dir().join(format!("lgh-framing-tilt-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("tilted.obj");
-    std::fs::write(&path, obj).unwrap();
-    let scene = lgh_scene::obj::load(&path);
-    let _ = std::fs::remove_dir_all(&dir);
-    let camera = scene.unwrap().camera();
+    let camera = quad("tilted", [Vec3::ZERO, u, u + v, v]).camera();
     let view = (camera.look_at - camera.position).normalize();
     let normal = u.cross(v).normalize();
     let cos = view.dot(normal).abs();
