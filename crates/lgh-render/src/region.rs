@@ -169,12 +169,11 @@ pub fn guard_band(s: &crate::RenderSettings) -> u32 {
     } else {
         return 9;
     };
-    let atrous = 2
-        * ((1u32
-            << s.shadows
-                .filter_passes
-                .min(crate::denoise::atrous::MAX_PASSES))
-            - 1);
+    let passes = s
+        .shadows
+        .filter_passes
+        .min(crate::denoise::atrous::MAX_PASSES);
+    let atrous = 2 * ((1u32 << passes) - 1);
     atrous
         .saturating_add(s.tiling.blur.radius)
         .saturating_add(tile)

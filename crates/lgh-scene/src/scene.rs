@@ -146,6 +146,10 @@ impl Scene {
                 },
             ));
         }
+        // Framed once, here: the light added at the camera needs it too.
+        if self.camera.is_none() {
+            self.camera = Some(self.framing_camera());
+        }
         if default_light {
             self.add_default_light();
         }
@@ -177,15 +181,11 @@ impl Scene {
         if !self.exposure.is_finite() || self.exposure <= 0.0 {
             return Err(SceneError::new(path, "exposure must be a positive number"));
         }
-        match &self.camera {
-            Some(c) if !c.is_valid() => {
-                return Err(SceneError::new(
-                    path,
-                    "invalid camera: position equals look_at, up is parallel to the view, or fov is not in (0, 180)",
-                ));
-            }
-            Some(_) => {}
-            None => self.camera = Some(self.framing_camera()),
+        if self.camera.as_ref().is_some_and(|c| !c.is_valid()) {
+            return Err(SceneError::new(
+                path,
+                "invalid camera: position equals look_at, up is parallel to the view, or fov is not in (0, 180)",
+            ));
         }
         Ok(())
     }

@@ -227,7 +227,7 @@ pub fn pass_over(res: &mut [Reservoir<ShadowSample>], sum: f32) -> bool {
 /// numbers, or the screen's dithered strata of [`crate::shading::strata`]), F = sum of
 /// f_j. The lights come in
 /// chunks of `N`: `chunk_weights[c]` is the sum of chunk c's weights (in any order), and
-/// `lanes(c)` evaluates the chunk again, giving its lights' weights and a payload for
+/// `lanes(c)` gives chunk c's lights' weights (kept by the loop, or evaluated again) and a payload for
 /// `take(i, lane, &payload, f_j, F)`, called once per sample in order of i.
 ///
 /// Each sample alone is the draw of Appendix A (LGH 2019): light j with probability
