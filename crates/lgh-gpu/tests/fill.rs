@@ -2,18 +2,20 @@
 //! "Filling cut windows") against the CPU's: the masks of the pixels that fill, and `lgh`'s
 //! unshadowed frame under 4 x 4 interleaving, where the fill changes the image.
 
+use glam::Vec3;
 use lgh_render::image::Image;
 use lgh_render::image::metrics::diff;
 use lgh_render::methods::lgh::LGH_UNSHADOWED;
 use lgh_render::passes::gbuffer::GBuffer;
-use lgh_render::shading::interleave::{BlurParams, discontinuities, missed_sub_images};
+use lgh_render::shading::interleave::{BlurParams, JUMP_X, discontinuities, missed_sub_images};
 use lgh_render::{Component, RenderSettings, Silent, World, render_frame};
 
 mod common;
 use common::{SCENES, world};
 
-/// The masks of the GPU (`lgh_gpu::fill::missed_sub_images`) equal the CPU's
-/// (`missed_sub_images`) on the G-buffers of the default scene and the three test scenes,
+/// The jumps and masks of the GPU (`lgh_gpu::interleave::discontinuities`,
+/// `lgh_gpu::fill::missed_sub_images`) equal the CPU's (`discontinuities`,
+/// `missed_sub_images`) on the G-buffers of the default scene and the three test scenes,
 /// at interleaving n = 2, 3, 4 and 8 (64 sub-images: both words) and three thresholds, in
 /// images whose width is not a multiple of n; they are integers from the same walks, so
 /// they are equal bit for bit. Some pixels fill in every scene at n = 4.
@@ -28,13 +30,19 @@ fn gpu_fill_masks_are_the_cpus() {
         let w = world(rel);
         let (width, height) = (101, 57);
         let camera = w.scene.camera().frame(width, height);
-        let g = GBuffer::render(&w, &camera, width, height);
-        for n in [2, 3, 4, 8] {
+        let metres = GBuffer::render(&w, &camera, width, height);
+        for (g, n) in [2, 3, 4, 8].into_iter().map(|n| (&metres, n)) {
             let p = BlurParams::defaults().with_phases(n);
-            let disc = discontinuities(&g, &p);
+            let disc = discontinuities(g, &p);
+            let gpu_disc = lgh_gpu::interleave::discontinuities(ctx, g, &p).expect("gpu");
+            let differ = (0..g.len()).filter(|&i| gpu_disc[i] != disc[i]).count();
+            assert_eq!(
+                differ, 0,
+                "{rel:?} n = {n}: the jumps of {differ} pixels differ"
+            );
             for below in [0.3, 0.6, 1.0] {
-                let cpu = missed_sub_images(&g, &disc, &p.recombination(), below);
-                let gpu = lgh_gpu::fill::missed_sub_images(ctx, &g, &p, below).expect("gpu");
+                let cpu = missed_sub_images(g, &disc, &p.recombination(), below);
+                let gpu = lgh_gpu::fill::missed_sub_images(ctx, g, &p, below).expect("gpu");
                 let filling = cpu
                     .as_ref()
                     .map_or(0, |m| m.iter().filter(|&&m| m != 0).count());
@@ -57,6 +65,53 @@ fn gpu_fill_masks_are_the_cpus() {
                 );
             }
         }
+    }
+}
+
+/// The GPU's jumps equal the CPU's on a face-on plane whose depth steps by two units in the
+/// last place (rounding) at one column and by 1% (an edge) at another, in units from
+/// millimetres to 100 km: the depth test's floor is relative to the depth on both.
+#[test]
+#[cfg_attr(
+    not(gpu_adapter),
+    ignore = "needs a GPU adapter (a Vulkan driver: mesa-vulkan-drivers)"
+)]
+fn gpu_jumps_are_the_cpus_in_any_units() {
+    let ctx = lgh_gpu::GpuContext::shared().expect("an adapter");
+    let (w, h) = (24u32, 4u32);
+    let n = (w * h) as usize;
+    for s in [1e-5f32, 1e-3, 1.0, 1e3] {
+        let base = 5.0 * s;
+        let two_ulps = f32::from_bits(base.to_bits() + 2);
+        let column = |i: usize| i as u32 % w;
+        let g = GBuffer {
+            width: w,
+            height: h,
+            position: (0..n)
+                .map(|i| Vec3::new(column(i) as f32, (i as u32 / w) as f32, -5.0) * s)
+                .collect(),
+            normal: vec![Vec3::Z; n],
+            geo_normal: vec![Vec3::Z; n],
+            albedo: vec![Vec3::ONE; n],
+            depth: (0..n)
+                .map(|i| match column(i) {
+                    x if x < 8 => base,
+                    x if x < 16 => two_ulps,
+                    _ => 1.01 * base,
+                })
+                .collect(),
+            emission: vec![Vec3::ZERO; n],
+            ..GBuffer::default()
+        };
+        let p = BlurParams::defaults().with_phases(4);
+        let cpu = discontinuities(&g, &p);
+        let gpu = lgh_gpu::interleave::discontinuities(ctx, &g, &p).expect("gpu");
+        assert_eq!(gpu, cpu, "units {s}");
+        let edges: Vec<u32> = (0..n)
+            .filter(|&i| cpu[i] & JUMP_X != 0)
+            .map(column)
+            .collect();
+        assert_eq!(edges, vec![15; h as usize], "units {s}");
     }
 }
 

@@ -88,6 +88,28 @@ pub(crate) struct Planes {
     pub params: BlurParams,
 }
 
+/// The discontinuities of `p` in the G-buffer `g`, read back (one byte a pixel, the bits of
+/// lgh-render's `shading::interleave::discontinuities`, which they equal bit for bit): for
+/// tests and tools.
+///
+/// # Errors
+/// The G-buffer cannot be uploaded, the image exceeds one dispatch, or the read fails.
+pub fn discontinuities(
+    ctx: &GpuContext,
+    g: &lgh_render::passes::gbuffer::GBuffer,
+    p: &BlurParams,
+) -> Result<Vec<u8>, GpuError> {
+    let gbuffer = ctx.gbuffer(g)?;
+    let mut batch = Batch::new(ctx);
+    let jumps = ctx.output("jumps", 4 * g.len() as u64)?;
+    record_jumps(ctx, &mut batch, (&gbuffer, g.width, g.height), p, &jumps)?;
+    batch.read(jumps.buffer(), 4 * g.len() as u64)?;
+    batch.keep(jumps);
+    let (reads, _) = batch.finish()?;
+    let words: &[u32] = reads.first().map_or(&[], |r| bytemuck::cast_slice(r));
+    Ok(words.iter().map(|&w| w as u8).collect())
+}
+
 /// Records the discontinuities of `p` (its z and normal thresholds; the crease bits with
 /// [`BlurParams::crease_n_diff`]) of the G-buffer `g` (`gbuffer`, `width` x `height`) into
 /// `jumps` (one word a pixel), as lgh-render's `shading::interleave::discontinuities`.

@@ -22,6 +22,10 @@ struct Params {
 
 const BIG: f32 = 3.0e38;
 
+// The least depth slope, relative to the pixel's depth (SLOPE_FLOOR of lgh-render's
+// shading/interleave).
+const SLOPE_FLOOR: f32 = 2e-5;
+
 fn hit(i: u32) -> bool {
     return gbuffer[i].position.w != 0.0;
 }
@@ -76,7 +80,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let gy = slope(i, i - w, y > 0u, i + w, y + 1u < params.height);
         let fx = select(0.0, gx, gx < BIG);
         let fy = select(0.0, gy, gy < BIG);
-        scale = max(max(fx, fy), 1e-4);
+        scale = max(max(fx, fy), SLOPE_FLOOR * depth(i));
     }
     var flags = 0u;
     if (x + 1u < w) {

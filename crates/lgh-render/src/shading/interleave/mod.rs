@@ -132,7 +132,8 @@ pub struct BlurParams {
     pub radius: u32,
     /// Gaussian standard deviation in pixels.
     pub sigma: f32,
-    /// Depth discontinuity: |dz| / (max |depth gradient| + 1e-4) above this (linear depth).
+    /// Depth discontinuity: |dz| / max(|depth gradient|, [`SLOPE_FLOOR`] x depth) above this
+    /// (linear depth).
     pub z_diff: f32,
     /// Normal discontinuity: 1 - n . n' above this.
     pub n_diff: f32,
@@ -214,6 +215,13 @@ impl BlurParams {
     }
 }
 
+/// The least depth slope of the discontinuity test, relative to the pixel's depth (the
+/// slope of a surface seen face-on is zero but for rounding). Relative, so that a scene in
+/// centimetres finds the jumps it finds in metres: an absolute 1e-4 was below the rounding
+/// of depths in the hundreds, whose one-ulp steps then read as discontinuities (2e-5 x a
+/// depth of 5 is that 1e-4).
+pub const SLOPE_FLOOR: f32 = 2e-5;
+
 /// A jump between a pixel and its neighbour at (1, 0) ([`JUMP_X`]) and at (0, 1)
 /// ([`JUMP_Y`]), one bit each per pixel: the depth jumps by more than `z_diff` times the local
 /// depth gradient, or the normals differ by more than `n_diff` in 1 - n . n', or exactly one
@@ -246,7 +254,7 @@ pub fn discontinuities(g: &GBuffer, p: &BlurParams) -> Vec<u8> {
                 let gx = slope((x > 0).then(|| i - 1), (x + 1 < w).then_some(i + 1));
                 let gy = slope((y > 0).then(|| i - w), (y + 1 < h).then_some(i + w));
                 let finite = |v: f32| if v.is_finite() { v } else { 0.0 };
-                finite(gx).max(finite(gy)).max(1e-4)
+                finite(gx).max(finite(gy)).max(SLOPE_FLOOR * g.depth[i])
             } else {
                 1.0
             };

@@ -372,3 +372,32 @@ fn the_stop_on_a_passes_over_the_noise_of_the_sub_images() {
     assert!(stopped(&s) < 0.05, "{}", stopped(&s));
     assert!(stopped(&old) > 0.5, "{}", stopped(&old));
 }
+
+/// A face-on plane at depth 5 s whose depths step by two units in the last place at one
+/// column (rounding, not an edge), and a real step of 1% at another: at every scale s of
+/// the scene's units (millimetres to kilometres) only the real step is a discontinuity.
+#[test]
+fn discontinuities_do_not_depend_on_the_scene_units() {
+    let (w, h) = (24u32, 4u32);
+    for s in [1e-3f32, 1.0, 1e3, 1e4] {
+        let base = 5.0 * s;
+        let two_ulps = f32::from_bits(base.to_bits() + 2);
+        let n = (w * h) as usize;
+        let depth: Vec<f32> = (0..n)
+            .map(|i| match i as u32 % w {
+                x if x < 8 => base,
+                x if x < 16 => two_ulps,
+                _ => 1.01 * base,
+            })
+            .collect();
+        let position = (0..n)
+            .map(|i| Vec3::new((i as u32 % w) as f32, (i as u32 / w) as f32, -1.0) * s)
+            .collect();
+        let g = GBuffer::from_planes((w, h), position, vec![Vec3::Z; n], depth);
+        let disc = discontinuities(&g, &BlurParams::defaults());
+        for (i, &d) in disc.iter().enumerate() {
+            let x = i as u32 % w;
+            assert_eq!(d & JUMP_X != 0, x == 15, "scale {s}, pixel {i}: {d:#b}");
+        }
+    }
+}
