@@ -65,6 +65,10 @@ fn parse(bytes: &[u8]) -> Result<(gltf::Gltf, Option<String>), gltf::Error> {
     use gltf::json::validation::{Error as Problem, Validate};
     let gltf = gltf::Gltf::from_slice_without_validation(bytes)?;
     let root = gltf.document.as_json();
+    let dangling = panicking_problems(root);
+    if !dangling.is_empty() {
+        return Err(gltf::Error::Validation(dangling));
+    }
     let mut problems = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, problem| {
         problems.push((path(), problem));
@@ -86,6 +90,44 @@ fn parse(bytes: &[u8]) -> Result<(gltf::Gltf, Option<String>), gltf::Error> {
         )
     });
     Ok((gltf, warning))
+}
+
+/// The problems on which the `gltf` crate panics instead of reporting them (found by
+/// lgh-fuzz): a POSITION attribute whose accessor does not exist (its validation reads the
+/// accessor's bounds), an image with neither a `uri` nor a `bufferView`, and one in a
+/// `bufferView` without its `mimeType` (its `source` unwraps them). The loader contains such
+/// panics, but with a vaguer line.
+fn panicking_problems(
+    root: &gltf::json::Root,
+) -> Vec<(gltf::json::Path, gltf::json::validation::Error)> {
+    use gltf::json::validation::{Checked, Error as Problem};
+    use gltf::json::{Path, mesh::Semantic};
+    let mut problems = Vec::new();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive
+                .attributes
+                .get(&Checked::Valid(Semantic::Positions));
+            if position.is_some_and(|a| a.value() >= root.accessors.len()) {
+                let path = Path::new()
+                    .field("meshes")
+                    .index(m)
+                    .field("primitives")
+                    .index(p);
+                let path = path.field("attributes").key("POSITION");
+                problems.push((path, Problem::IndexOutOfBounds));
+            }
+        }
+    }
+    for (i, image) in root.images.iter().enumerate() {
+        let path = Path::new().field("images").index(i);
+        if image.buffer_view.is_some() && image.mime_type.is_none() {
+            problems.push((path.field("mimeType"), Problem::Missing));
+        } else if image.buffer_view.is_none() && image.uri.is_none() {
+            problems.push((path.field("uri"), Problem::Missing));
+        }
+    }
+    problems
 }
 
 /// Reads `path` as described in the module documentation.
@@ -327,6 +369,35 @@ mod bounds_tests {
             line.contains("bufferView") && !line.contains("POSITION"),
             "{line}"
         );
+    }
+
+    /// The problems on which the `gltf` crate panics are refused in one line that names
+    /// them: a POSITION accessor that does not exist, an image without a source or, in a
+    /// buffer view, without its MIME type.
+    #[test]
+    fn what_the_gltf_crate_panics_on_is_named() {
+        let cases = [
+            (
+                triangle("", 1).replace(r#""POSITION":0"#, r#""POSITION":7"#),
+                "POSITION",
+            ),
+            (
+                triangle("", 1).replace(r#""asset""#, r#""images":[{"name":"x"}],"asset""#),
+                "images[0].uri",
+            ),
+            (
+                triangle("", 1).replace(r#""asset""#, r#""images":[{"bufferView":0}],"asset""#),
+                "images[0].mimeType",
+            ),
+        ];
+        for (json, named) in cases {
+            assert_ne!(json, triangle("", 1), "the case changed nothing");
+            let Err(e) = parse(json.as_bytes()) else {
+                panic!("loaded: {named}");
+            };
+            let line = describe(&e);
+            assert!(line.contains(named), "{named}: {line}");
+        }
     }
 
     /// Through the loader: the triangle is there and the warning is the scene's.
