@@ -381,3 +381,32 @@ fn large_inputs_match_the_reference() {
         assert_same(&g, &reference);
     }
 }
+
+/// The hierarchy does not depend on the units: lights in a box 1e-5 wide at the origin (a
+/// tenth of a millimetre in metres) get the hierarchy of the same lights scaled to a box 1
+/// wide, scaled (the same levels and lights per level, h_top in proportion). The top cell
+/// was floored at 1e-3, 100 times the box, which wasted the finest levels.
+#[test]
+fn a_tiny_box_gets_the_hierarchy_of_a_large_one() {
+    let large = random_box(3000, 21, Vec3::ONE, Vec3::splat(-0.5));
+    let s = 1e-5;
+    let tiny = Lights {
+        positions: large.positions.iter().map(|&p| p * s).collect(),
+        intensity: large.intensity.clone(),
+        normals: large.normals.clone(),
+    };
+    let (a, b) = (
+        build(&large, LevelCount::Auto, Construction::Restrict),
+        build(&tiny, LevelCount::Auto, Construction::Restrict),
+    );
+    assert_eq!(a.l_max(), b.l_max());
+    assert_eq!(a.level_start, b.level_start);
+    let ratio = b.geometry.h_top / a.geometry.h_top;
+    assert!(
+        (ratio / s - 1.0).abs() < 1e-4,
+        "h_top {} vs {}",
+        b.geometry.h_top,
+        a.geometry.h_top
+    );
+    check_invariants(&tiny, &b);
+}

@@ -22,6 +22,9 @@ pub struct GridGeometry {
 /// The factor between the longest edge of the bounds and the top cell (LGH demo code).
 pub const TOP_CELL_SCALE: f32 = 1.1;
 
+/// The least top cell, for a zero-size box at the origin (one light there, or all).
+const MIN_CELL: f32 = 1e-10;
+
 /// The finest allowed hierarchy: level 1 has at most 2^(MAX_LEVELS - 1) = 512 cells per axis.
 pub const MAX_LEVELS: u32 = 10;
 
@@ -33,7 +36,10 @@ impl GridGeometry {
     pub fn new(lo: Vec3, hi: Vec3, l_max: u32) -> Self {
         let centre = 0.5 * (lo + hi);
         let edge = (hi - lo).max_element();
-        let floor = 1e-3 * centre.abs().max_element().max(1.0);
+        // Relative to the box's distance from the origin (cells far finer than that lose
+        // their coordinates to rounding), not to the scene's units: a box a tenth of a
+        // millimetre wide in metres keeps its fine cells.
+        let floor = (1e-3 * centre.abs().max_element()).max(MIN_CELL);
         let h_top = (TOP_CELL_SCALE * edge).max(floor);
         Self {
             origin: centre - Vec3::splat(0.5 * h_top),
