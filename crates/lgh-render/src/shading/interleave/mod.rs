@@ -216,10 +216,10 @@ impl BlurParams {
 }
 
 /// The least depth slope of the discontinuity test, relative to the pixel's depth (the
-/// slope of a surface seen face-on is zero but for rounding). Relative, so that a scene in
-/// centimetres finds the jumps it finds in metres: an absolute 1e-4 was below the rounding
-/// of depths in the hundreds, whose one-ulp steps then read as discontinuities (2e-5 x a
-/// depth of 5 is that 1e-4).
+/// slope of a surface seen face-on is zero but for rounding). Relative, so that a scene finds
+/// the same jumps in any units: an absolute 1e-4 hid real jumps in a scene in kilometres,
+/// and in one in millimetres let rounding steps of a face-on wall's depth (two ulps of
+/// 5,000) read as jumps (2e-5 x a depth of 5 is that 1e-4).
 pub const SLOPE_FLOOR: f32 = 2e-5;
 
 /// A jump between a pixel and its neighbour at (1, 0) ([`JUMP_X`]) and at (0, 1)
