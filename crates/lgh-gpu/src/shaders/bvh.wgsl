@@ -34,7 +34,10 @@ fn triangle_hit(t: u32, o: vec3<f32>, d: vec3<f32>, t_max: f32) -> vec3<f32> {
     let e2 = tris[3u * t + 2u].xyz - a;
     let p = cross(d, e2);
     let det = dot(e1, p);
-    if (abs(det) < 1e-12) {
+    // Only an exactly parallel ray is refused here (a bound on |det| in scene units would
+    // miss every triangle of a small enough scene); a nearly parallel one gets barycentrics
+    // far outside.
+    if (det == 0.0) {
         return vec3<f32>(-1.0, 0.0, 0.0);
     }
     let inv = 1.0 / det;
