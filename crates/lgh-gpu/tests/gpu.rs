@@ -202,6 +202,34 @@ fn the_flattened_bvh_answers_as_the_cpu_tracer() {
     }
 }
 
+/// The shadow rays of the brute force at 32 x 18 with `vpls` VPLs: every visible point to
+/// every VPL.
+fn brute_pairs(w: &lgh_render::World, vpls: usize) -> Vec<lgh_gpu::rays::PointPair> {
+    let s = RenderSettings {
+        width: 32,
+        height: 18,
+        vpls,
+        method: BRUTE_UNSHADOWED,
+        ..RenderSettings::default()
+    };
+    let vpls = render_frame(w, &s, &Silent).expect("frame").vpls.vpls;
+    let g =
+        lgh_render::passes::gbuffer::GBuffer::render(w, &w.scene.camera().frame(32, 18), 32, 18);
+    (0..g.len())
+        .filter(|&p| g.is_hit(p))
+        .flat_map(|p| {
+            let (a, na) = (g.position[p], g.geo_normal[p]);
+            let vpls = &vpls;
+            (0..vpls.len()).map(move |j| lgh_gpu::rays::PointPair {
+                a,
+                na,
+                b: vpls.positions[j],
+                nb: vpls.normals[j],
+            })
+        })
+        .collect()
+}
+
 /// The GPU's traversal answers as the CPU's tracer for the shadow rays of the brute force
 /// (every visible point to every VPL) on the default scene and the three test scenes.
 #[test]
@@ -213,33 +241,7 @@ fn gpu_occlusion_agrees_with_the_cpu_tracer() {
     let ctx = lgh_gpu::GpuContext::shared().expect("an adapter");
     for rel in SCENES {
         let w = world(rel);
-        let s = RenderSettings {
-            width: 32,
-            height: 18,
-            vpls: 200,
-            method: BRUTE_UNSHADOWED,
-            ..RenderSettings::default()
-        };
-        let vpls = render_frame(&w, &s, &Silent).expect("frame").vpls.vpls;
-        let g = lgh_render::passes::gbuffer::GBuffer::render(
-            &w,
-            &w.scene.camera().frame(32, 18),
-            32,
-            18,
-        );
-        let pairs: Vec<lgh_gpu::rays::PointPair> = (0..g.len())
-            .filter(|&p| g.is_hit(p))
-            .flat_map(|p| {
-                let (a, na) = (g.position[p], g.geo_normal[p]);
-                let vpls = &vpls;
-                (0..vpls.len()).map(move |j| lgh_gpu::rays::PointPair {
-                    a,
-                    na,
-                    b: vpls.positions[j],
-                    nb: vpls.normals[j],
-                })
-            })
-            .collect();
+        let pairs = brute_pairs(&w, 200);
         let scene =
             lgh_gpu::GpuScene::new(ctx, &w.scene.mesh, w.cutouts.as_deref()).expect("upload");
         let gpu = lgh_gpu::rays::occluded_between(ctx, &scene, &pairs, w.ray_epsilon).expect("gpu");
@@ -277,35 +279,17 @@ fn gpu_occlusion_agrees_with_the_cpu_tracer() {
 fn gpu_occlusion_does_not_depend_on_the_units() {
     let ctx = lgh_gpu::GpuContext::shared().expect("an adapter");
     let w = world(Some("test/two-rooms.toml"));
-    let s = RenderSettings {
-        width: 32,
-        height: 18,
-        vpls: 100,
-        method: BRUTE_UNSHADOWED,
-        ..RenderSettings::default()
-    };
-    let vpls = render_frame(&w, &s, &Silent).expect("frame").vpls.vpls;
-    let g =
-        lgh_render::passes::gbuffer::GBuffer::render(&w, &w.scene.camera().frame(32, 18), 32, 18);
+    let pairs = brute_pairs(&w, 100);
     let unit = 1e-7;
     let mut mesh = w.scene.mesh.clone();
     mesh.positions.iter_mut().for_each(|p| *p *= unit);
     let scene = lgh_gpu::GpuScene::new(ctx, &mesh, w.cutouts.as_deref()).expect("upload");
-    let pairs: Vec<[glam::Vec3; 4]> = (0..g.len())
-        .filter(|&p| g.is_hit(p))
-        .flat_map(|p| {
-            let (a, na) = (g.position[p], g.geo_normal[p]);
-            let vpls = &vpls;
-            (0..vpls.len()).map(move |j| [a, na, vpls.positions[j], vpls.normals[j]])
-        })
-        .collect();
     let scaled: Vec<lgh_gpu::rays::PointPair> = pairs
         .iter()
-        .map(|&[a, na, b, nb]| lgh_gpu::rays::PointPair {
-            a: a * unit,
-            na,
-            b: b * unit,
-            nb,
+        .map(|p| lgh_gpu::rays::PointPair {
+            a: p.a * unit,
+            b: p.b * unit,
+            ..*p
         })
         .collect();
     let gpu =
@@ -313,8 +297,8 @@ fn gpu_occlusion_does_not_depend_on_the_units() {
     let occluded = gpu.iter().filter(|&&o| o).count();
     let wrong = (0..pairs.len())
         .filter(|&k| {
-            let [a, na, b, nb] = pairs[k];
-            gpu[k] != w.occluded_between(a, na, b, nb)
+            let p = pairs[k];
+            gpu[k] != w.occluded_between(p.a, p.na, p.b, p.nb)
         })
         .count();
     assert!(
