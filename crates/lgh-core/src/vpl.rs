@@ -170,12 +170,30 @@ pub fn light_irradiance_along(
     flux: Vec3,
     eps2: f32,
 ) -> Vec3 {
+    flux * (light_geometry(d, d2, inv_d, n_x, m, iso, eps2) * std::f32::consts::FRAC_1_PI)
+}
+
+/// The geometry term G = cos_x cos_v / (d^2 + eps^2) of a light with emission normal `m` and
+/// isotropic share `iso` at offset d = p - x (with d^2 and 1 / |d| at hand) from a receiver
+/// with normal `n_x`, cos_v = max(0, -m . w) + iso; zero where either cosine is not positive
+/// or d is zero. [`light_irradiance_along`] is flux G / pi.
+#[inline]
+#[must_use]
+pub fn light_geometry(
+    d: Vec3,
+    d2: f32,
+    inv_d: f32,
+    n_x: Vec3,
+    m: Vec3,
+    iso: f32,
+    eps2: f32,
+) -> f32 {
     let cos_x = n_x.dot(d) * inv_d;
     let cos_v = (-m.dot(d) * inv_d).max(0.0) + iso;
     if cos_x <= 0.0 || cos_v <= 0.0 || !inv_d.is_finite() {
-        return Vec3::ZERO;
+        return 0.0;
     }
-    flux * (cos_x * cos_v / (std::f32::consts::PI * (d2 + eps2)))
+    cos_x * cos_v / (d2 + eps2)
 }
 
 #[cfg(test)]

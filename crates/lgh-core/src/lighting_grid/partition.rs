@@ -6,19 +6,30 @@
 //! A grid light g of level l stands for w_g(p_i) of every input light i (the trilinear
 //! weight of its vertex at spacing h_l; the hierarchy must be the all-scatter one, which the
 //! restriction builds exactly), and is shaded at x with the blending weight B_l(|x - p_g|),
-//! the distance taken to its centroid p_g. Input light i is thus counted at x with the total
-//! weight
+//! the distance taken to its centroid p_g, times its geometry term G_g(x) = cos_x cos_v /
+//! (|x - p_g|^2 + eps^2) (its normal m_g and isotropic share as the lighting loop shades
+//! it, stored to 8 bits: [`quantized_emission`]). Input light i is counted at x with the total weight
 //!
 //! Lambda_i(x) = sum over levels l, sum over the 8 vertices g of p_i's cell of level l,
-//! of w_g(p_i) B_l(|x - p_g|),
+//! of w_g(p_i) B_l(|x - p_g|) G_g(x)
 //!
-//! which is near 1 (the B_l sum to one at any one distance, and the w_g to one at any level)
-//! but not equal to it: the centroids are not where input light i is. The shares
-//! pi_ig(x) = w_g(p_i) B_l(|x - p_g|) / Lambda_i(x) sum to exactly one over the grid lights
-//! of all levels, so the sum over g of the sum over i of pi_ig f_i is the sum of the f_i,
-//! whatever the hierarchy's approximation. Blending by the distance to the vertex instead
-//! would need no lookup of centroids, but at alpha = 1 it counts a light near x up to three
-//! times (the vertices of coarse levels are far from x even when all their light is near).
+//! (level 0, the input lights themselves as S_0, adds B_0(|x - p_i|) G_i(x)). The shares
+//! pi_ig(x) = w_g(p_i) B_l(|x - p_g|) G_g(x) / Lambda_i(x) sum to exactly one over the grid
+//! lights of all levels, so the sum over g of the sum over i of pi_ig f_i is the sum of the
+//! f_i, whatever the hierarchy's approximation.
+//!
+//! Any shares that sum to one keep the estimate unbiased. These are (up to the walk's and
+//! the representatives' draws) proportional to the probability that the lighting loop's
+//! selection, which draws g in proportion to B_l(|x - p_g|) I_g G_g(x), reaches light i
+//! through g: the balance heuristic of multiple importance sampling (Veach 1997) over the
+//! grid lights. A sample's weight then no longer depends on which of light i's grid lights
+//! drew it. Shares without G_g (w_g B_l alone, the first version) gave a VPL's light to a
+//! grid light whose centroid lies at a grazing angle or behind the receiver: one rarely
+//! drawn, whose samples then weighed hundreds of times the pixel's mean (discs of twice the
+//! brightness after the filters), or never drawn (light lost). Blending by the distance to
+//! the vertex instead would need no lookup of centroids, but at alpha = 1 it counts a light
+//! near x up to three times (the vertices of coarse levels are far from x even when all
+//! their light is near).
 
 use glam::{UVec3, Vec3};
 
@@ -27,6 +38,7 @@ use rayon::prelude::*;
 use super::splat::cell_of;
 use super::{GridGeometry, LightingGrid};
 use crate::blending::{LevelRole, blend};
+use crate::vpl::light_geometry;
 
 /// The levels a hierarchy shades and their blending radii: levels `lowest..=l_max`
 /// (`lowest` 0 adds the input lights themselves as S_0), with r_l = alpha h_l.
@@ -69,27 +81,77 @@ fn constant_blend(role: LevelRole, near: f32, far: f32, r: f32) -> Option<f32> {
     }
 }
 
-/// The largest level, in vertices, whose centroids [`Partition`] keeps in a dense table
-/// (24 MB).
+/// The largest level, in vertices, whose lights [`Partition`] keeps in a dense table
+/// (32 MB).
 const MAX_DENSE: usize = 1 << 21;
 
-/// Lambda_i(x) for one hierarchy: its geometry, levels, and the centroid of every vertex's
-/// light, in a dense table per level where the level is small enough (x fastest; NaN where
-/// no light), so that the 8 lights around a point are read from 4 places in memory without a
-/// search, and as sorted rows for the larger levels.
+/// What [`Partition::share_total`] reads of a grid light: its centroid p_g and, in one
+/// word, its emission normal m_g and isotropic share ([`quantized_emission`]): 16 bytes, so
+/// that the table's reads cost little more than the centroids' alone. Weights in full
+/// precision (32 bytes) took the function 3.3 times as long, from cache misses.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+struct VertexLight {
+    position: Vec3,
+    emission: u32,
+}
+
+impl VertexLight {
+    /// A vertex without a light (NaN position).
+    const NONE: Self = Self {
+        position: Vec3::NAN,
+        emission: 0,
+    };
+
+    fn new(position: Vec3, m: Vec3, iso: f32) -> Self {
+        let snorm = |v: f32| ((v.clamp(-1.0, 1.0) * 127.0).round() as i8 as u8) as u32;
+        let iso = ((iso * 4.0).clamp(0.0, 1.0) * 255.0).round() as u32;
+        Self {
+            position,
+            emission: snorm(m.x) | (snorm(m.y) << 8) | (snorm(m.z) << 16) | (iso << 24),
+        }
+    }
+
+    /// m_g and the isotropic share, as stored.
+    #[inline(always)]
+    fn emission(&self) -> (Vec3, f32) {
+        let e = self.emission;
+        let snorm = |shift: u32| f32::from((e >> shift) as u8 as i8) * (1.0 / 127.0);
+        let iso = (e >> 24) as f32 * (0.25 / 255.0);
+        (Vec3::new(snorm(0), snorm(8), snorm(16)), iso)
+    }
+
+    fn is_light(&self) -> bool {
+        !self.position.x.is_nan()
+    }
+}
+
+/// The emission normal `m` (|m| <= 1) and isotropic share `iso` (at most 1/4, as
+/// [`crate::vpl::GridEmission::isotropic`] gives) as [`Partition`] weighs a grid light:
+/// each component of m to 1/127, the share to 1/1020. The unbiased estimate divides by the
+/// geometry term of the light it drew with these, so that its shares stay exact.
+#[must_use]
+pub fn quantized_emission(m: Vec3, iso: f32) -> (Vec3, f32) {
+    VertexLight::new(Vec3::ZERO, m, iso).emission()
+}
+
+/// Lambda_i(x) for one hierarchy: its geometry, levels, and the light of every vertex, in a
+/// dense table per level where the level is small enough (x fastest; NaN where no light), so
+/// that the 8 lights around a point are read from 4 places in memory without a search, and
+/// as sorted rows for the larger levels.
 #[derive(Clone, Debug)]
 pub struct Partition {
     /// The shaded levels and their radii.
     pub levels: ShadedLevels,
     geometry: GridGeometry,
     /// Per level l >= 1 (index l - 1).
-    centroids: Vec<Centroids>,
+    lights: Vec<VertexLights>,
     /// Per shaded level, `lowest..=l_max`: its constants, computed once instead of per call
-    /// of [`Partition::blend_total`] (which runs once per visible shadow sample).
+    /// of [`Partition::share_total`] (which runs once per visible shadow sample).
     shaded: Vec<LevelConstants>,
 }
 
-/// One shaded level's constants for [`Partition::blend_total`].
+/// One shaded level's constants for [`Partition::share_total`].
 #[derive(Clone, Copy, Debug)]
 struct LevelConstants {
     l: u32,
@@ -104,41 +166,54 @@ struct LevelConstants {
     cells: u32,
 }
 
-/// The centroids of one level's lights by vertex.
+/// One level's lights by vertex.
 #[derive(Clone, Debug)]
-enum Centroids {
-    /// Every vertex (x fastest), NaN where there is no light.
-    Dense(Vec<Vec3>),
-    /// The lights in vertex order: where each row (y, z) starts, each light's x and centroid.
+enum VertexLights {
+    /// Every vertex (x fastest), [`VertexLight::NONE`] where there is no light.
+    Dense(Vec<VertexLight>),
+    /// The lights in vertex order: where each row (y, z) starts, each light's x and itself.
     Rows {
         start: Vec<u32>,
         x: Vec<u32>,
-        position: Vec<Vec3>,
+        light: Vec<VertexLight>,
     },
 }
 
 impl Partition {
-    /// The partition of `grid` shaded at `levels`.
+    /// The partition of `grid` shaded at `levels`, with `iso[g]` the isotropic emission share
+    /// of grid light g (in the grid's order; [`crate::vpl::GridEmission::isotropic`] of its
+    /// normal).
+    ///
+    /// # Panics
+    /// If `iso` does not hold one share per grid light.
     #[must_use]
-    pub fn new(grid: &LightingGrid, levels: ShadedLevels) -> Self {
-        Self::with_dense_limit(grid, levels, MAX_DENSE)
+    pub fn new(grid: &LightingGrid, levels: ShadedLevels, iso: &[f32]) -> Self {
+        Self::with_dense_limit(grid, levels, iso, MAX_DENSE)
     }
 
     /// [`Partition::new`] with dense tables for levels of at most `max_dense` vertices.
-    fn with_dense_limit(grid: &LightingGrid, levels: ShadedLevels, max_dense: usize) -> Self {
+    fn with_dense_limit(
+        grid: &LightingGrid,
+        levels: ShadedLevels,
+        iso: &[f32],
+        max_dense: usize,
+    ) -> Self {
+        assert_eq!(iso.len(), grid.position.len(), "one share per grid light");
         let geometry = grid.geometry;
-        let centroids = (1..=geometry.l_max)
+        let lights = (1..=geometry.l_max)
             .into_par_iter()
             .map(|l| {
                 let side = geometry.cells_per_axis(l) as usize + 1;
                 let range = grid.level_range(l);
-                let (vertex, position) = (&grid.vertex[range.clone()], &grid.position[range]);
+                let vertex = &grid.vertex[range.clone()];
+                let light =
+                    range.map(|g| VertexLight::new(grid.position[g], grid.normal[g], iso[g]));
                 if side * side * side <= max_dense {
-                    let mut table = vec![Vec3::NAN; side * side * side];
-                    for (v, &p) in vertex.iter().zip(position) {
-                        table[(v.z as usize * side + v.y as usize) * side + v.x as usize] = p;
+                    let mut table = vec![VertexLight::NONE; side * side * side];
+                    for (v, vl) in vertex.iter().zip(light) {
+                        table[(v.z as usize * side + v.y as usize) * side + v.x as usize] = vl;
                     }
-                    return Centroids::Dense(table);
+                    return VertexLights::Dense(table);
                 }
                 let mut start = vec![0u32; side * side + 1];
                 for v in vertex {
@@ -147,10 +222,10 @@ impl Partition {
                 for k in 1..start.len() {
                     start[k] += start[k - 1];
                 }
-                Centroids::Rows {
+                VertexLights::Rows {
                     start,
                     x: vertex.iter().map(|v| v.x).collect(),
-                    position: position.to_vec(),
+                    light: light.collect(),
                 }
             })
             .collect();
@@ -171,35 +246,36 @@ impl Partition {
         Self {
             levels,
             geometry,
-            centroids,
+            lights,
             shaded,
         }
     }
 
-    /// The centroid of the light at vertex `v` of level `l`, if it has one.
+    /// The light at vertex `v` of level `l`, if it has one.
     #[inline]
-    fn centroid(&self, l: u32, v: UVec3) -> Option<Vec3> {
+    fn light(&self, l: u32, v: UVec3) -> Option<VertexLight> {
         let side = self.geometry.cells_per_axis(l) as usize + 1;
         if v.x as usize >= side || v.y as usize >= side {
             return None;
         }
-        match self.centroids.get(l as usize - 1)? {
-            Centroids::Dense(table) => table
+        match self.lights.get(l as usize - 1)? {
+            VertexLights::Dense(table) => table
                 .get((v.z as usize * side + v.y as usize) * side + v.x as usize)
                 .copied()
-                .filter(|q| !q.x.is_nan()),
-            Centroids::Rows { start, x, position } => {
+                .filter(VertexLight::is_light),
+            VertexLights::Rows { start, x, light } => {
                 let row = v.z as usize * side + v.y as usize;
                 let (a, b) = (*start.get(row)? as usize, *start.get(row + 1)? as usize);
                 let k = x[a..b].binary_search(&v.x).ok()?;
-                Some(position[a + k])
+                Some(light[a + k])
             }
         }
     }
 
-    /// Lambda_i(x) of the module docs for the input light at `p` and the shading point `x`.
+    /// Lambda_i(x) of the module docs for the input light at `p` with normal `n_p` and the
+    /// shading point `x` with normal `n_x`, with the clamp `eps2` of the lighting loop.
     #[must_use]
-    pub fn blend_total(&self, x: Vec3, p: Vec3) -> f32 {
+    pub fn share_total(&self, x: Vec3, n_x: Vec3, p: Vec3, n_p: Vec3, eps2: f32) -> f32 {
         let origin = self.geometry.origin;
         let mut total = 0.0;
         for &LevelConstants {
@@ -213,35 +289,42 @@ impl Partition {
         } in &self.shaded
         {
             if l == 0 {
-                total += blend(role, (x - p).length(), r);
+                let d = p - x;
+                let d2 = d.length_squared();
+                let inv_d = d2.sqrt().recip();
+                let g = light_geometry(d, d2, inv_d, n_x, n_p, 0.0, eps2);
+                if g > 0.0 {
+                    total += blend(role, d2 * inv_d, r) * g;
+                }
                 continue;
             }
             // `locate`, multiplying by 1 / h_l.
             let (c, f) = cell_of((p - origin) * inv_h, cells);
             let centre = origin + (c.as_vec3() + Vec3::splat(0.5)) * h;
-            // Where B_l is the same at every distance the level's centroids can have, the
-            // level adds that value times the weights, which sum to one (every vertex around
-            // a light of non-zero intensity has a light).
+            // Where B_l is zero at every distance the level's centroids can have, the level
+            // adds nothing.
             let dc = (x - centre).length();
-            if let Some(b) = constant_blend(role, dc - CELL_REACH * h, dc + CELL_REACH * h, r) {
-                total += b;
+            if constant_blend(role, dc - CELL_REACH * h, dc + CELL_REACH * h, r) == Some(0.0) {
                 continue;
             }
-            // The 8 corners' centroids and weights (no light: weight 0, centroid x), kept as
-            // whole points: scattering them into per-axis lane arrays stored scalars that
-            // the vector loads after them waited on (store forwarding failed), the largest
-            // cost of this function in a profile of the shadow pass.
-            let mut q = [x; 8];
+            // The 8 corners' lights and weights (no light: weight 0, at x), kept as whole
+            // records: scattering them into per-axis lane arrays stored scalars that the
+            // vector loads after them waited on (store forwarding failed), the largest cost
+            // of this function in a profile of the shadow pass.
+            let mut q = [VertexLight {
+                position: x,
+                ..VertexLight::NONE
+            }; 8];
             let mut w = [0.0f32; 8];
             let (wx, wy, wz) = ([1.0 - f.x, f.x], [1.0 - f.y, f.y], [1.0 - f.z, f.z]);
-            let mut put = |corner: usize, found: Option<Vec3>| {
-                if let Some(p) = found {
-                    q[corner] = p;
+            let mut put = |corner: usize, found: Option<VertexLight>| {
+                if let Some(vl) = found {
+                    q[corner] = vl;
                     w[corner] = wx[corner & 1] * wy[(corner >> 1) & 1] * wz[corner >> 2];
                 }
             };
-            match self.centroids.get(l as usize - 1) {
-                Some(Centroids::Dense(table)) => {
+            match self.lights.get(l as usize - 1) {
+                Some(VertexLights::Dense(table)) => {
                     // The cell's corners are 8 fixed offsets from its first (c + 1 <= r,
                     // inside the table).
                     let side = cells as usize + 1;
@@ -260,7 +343,7 @@ impl Partition {
                     for (corner, &o) in offsets.iter().enumerate() {
                         put(
                             corner,
-                            table.get(base + o).copied().filter(|q| !q.x.is_nan()),
+                            table.get(base + o).copied().filter(VertexLight::is_light),
                         );
                     }
                 }
@@ -271,18 +354,29 @@ impl Partition {
                             (corner as u32 >> 1) & 1,
                             corner as u32 >> 2,
                         );
-                        put(corner, self.centroid(l, c + d));
+                        put(corner, self.light(l, c + d));
                     }
                 }
             }
+            // light_geometry times B_l, branch-free: one division for 1 / |d| and
+            // 1 / (d^2 + eps^2), as the lighting loop's batches do.
             let (rise_off, fall_off) = role.floors();
             let mut b = [0.0f32; 8];
             for k in 0..8 {
-                let (dx, dy, dz) = (q[k].x - x.x, q[k].y - x.y, q[k].z - x.z);
-                let t = (dx * dx + dy * dy + dz * dz).sqrt() * inv_r;
+                let (d, (m, iso)) = (q[k].position - x, q[k].emission());
+                let d2 = d.length_squared();
+                let dist = d2.sqrt();
+                let den = d2 + eps2;
+                let inv = 1.0 / (dist * den);
+                let inv_d = inv * den;
+                let t = dist * inv_r;
                 let rising = (2.0 * t - 1.0).clamp(0.0, 1.0).max(rise_off);
                 let falling = (2.0 - t).clamp(0.0, 1.0).max(fall_off);
-                b[k] = w[k] * rising.min(falling);
+                let cos_x = n_x.dot(d) * inv_d;
+                let cos_v = (-m.dot(d) * inv_d).max(0.0) + iso;
+                let ok = w[k] > 0.0 && d2 > 0.0 && cos_x > 0.0 && cos_v > 0.0;
+                let v = w[k] * rising.min(falling) * cos_x * cos_v * (inv * dist);
+                b[k] = if ok { v } else { 0.0 };
             }
             // Pairwise, in the order of the lanes above.
             total += ((b[0] + b[1]) + (b[2] + b[3])) + ((b[4] + b[5]) + (b[6] + b[7]));
@@ -296,62 +390,134 @@ mod tests {
     use super::*;
     use crate::lighting_grid::{Construction, InputLights, LevelCount, LightingGrid};
     use crate::rng::Rng;
+    use crate::vpl::GridEmission;
 
-    /// The shares w_g(p_i) B_l(|x - p_g|) / Lambda_i of every input light, summed over all
-    /// grid lights of all levels, are one, for random lights and shading points, with and
-    /// without S_0 and at several alpha; and Lambda stays within a plausible range.
+    /// The shares w_g(p_i) B_l(|x - p_g|) G_g(x) / Lambda_i of every input light, summed over
+    /// all grid lights of all levels by brute force, are one, for random lights, normals and
+    /// shading points, with and without S_0, at several alpha, with dense tables and rows.
     #[test]
     fn shares_sum_to_one() {
         let mut rng = Rng::new(&[41]);
-        let mut v = || {
-            Vec3::new(
-                4.0 * rng.next_f32(),
-                2.0 * rng.next_f32(),
-                3.0 * rng.next_f32(),
-            )
+        let mut u = || rng.next_f32();
+        let v = |u: &mut dyn FnMut() -> f32| Vec3::new(4.0 * u(), 2.0 * u(), 3.0 * u());
+        let p: Vec<Vec3> = (0..400).map(|_| v(&mut u)).collect();
+        let dir = |u: &mut dyn FnMut() -> f32| {
+            Vec3::new(u() - 0.5, u() - 0.5, u() - 0.5).normalize_or(Vec3::Y)
         };
-        let p: Vec<Vec3> = (0..400).map(|_| v()).collect();
+        let n: Vec<Vec3> = (0..p.len()).map(|_| dir(&mut u)).collect();
         let i = vec![Vec3::ONE; p.len()];
         let input = InputLights {
             positions: &p,
             intensity: &i,
-            normals: None,
+            normals: Some(&n),
         };
+        let eps2 = 1e-3;
+        let mut counted = 0;
         for construction in [Construction::Restrict, Construction::ScatterAll] {
             let (grid, _) =
                 LightingGrid::build(&input, LevelCount::Fixed(5), construction).unwrap();
+            let iso: Vec<f32> = (grid.normal.iter())
+                .map(|&m| GridEmission::EnergyConserving.isotropic(m))
+                .collect();
             let geom = grid.geometry;
-            for (lowest, alpha) in [(1, 1.0), (0, 1.0), (1, 2.0)] {
+            for (lowest, alpha) in [(1, 1.0), (0, 1.0), (1, 2.0), (0, 3.0)] {
                 let shaded = ShadedLevels { lowest, alpha };
-                let dense = Partition::new(&grid, shaded);
-                let rows = Partition::with_dense_limit(&grid, shaded, 0);
+                let dense = Partition::new(&grid, shaded, &iso);
+                let rows = Partition::with_dense_limit(&grid, shaded, &iso, 0);
                 for _ in 0..20 {
-                    let x = v();
-                    for &pi in p.iter().take(50) {
-                        let lambda = dense.blend_total(x, pi);
-                        assert_eq!(lambda, rows.blend_total(x, pi));
-                        assert!(lambda > 0.2 && lambda < 3.0, "{lambda}");
+                    let (x, nx) = (v(&mut u), dir(&mut u));
+                    for (&pi, &ni) in p.iter().zip(&n).take(50) {
+                        let lambda = dense.share_total(x, nx, pi, ni, eps2);
+                        assert_eq!(lambda, rows.share_total(x, nx, pi, ni, eps2));
                         // The shares of every grid light that holds pi, by brute force.
                         let mut sum = 0.0;
                         for l in lowest..=geom.l_max {
                             let role = LevelRole::of(l, lowest, geom.l_max);
                             let r = geom.radius(l, alpha);
+                            let g = |q: Vec3, m: Vec3, iso: f32| {
+                                let (d, d2) = (q - x, (q - x).length_squared());
+                                light_geometry(d, d2, d2.sqrt().recip(), nx, m, iso, eps2)
+                            };
                             if l == 0 {
-                                sum += blend(role, (x - pi).length(), r);
+                                sum += blend(role, (x - pi).length(), r) * g(pi, ni, 0.0);
                                 continue;
                             }
-                            for g in grid.level_range(l) {
-                                let d = (pi - geom.vertex_position(l, grid.vertex[g]))
+                            for k in grid.level_range(l) {
+                                let d = (pi - geom.vertex_position(l, grid.vertex[k]))
                                     / geom.cell_size(l);
                                 let t = (Vec3::ONE - d.abs()).max(Vec3::ZERO);
                                 let w = t.x * t.y * t.z;
-                                sum += w * blend(role, (x - grid.position[g]).length(), r);
+                                let b = blend(role, (x - grid.position[k]).length(), r);
+                                let (m, iso) = quantized_emission(grid.normal[k], iso[k]);
+                                sum += w * b * g(grid.position[k], m, iso);
                             }
                         }
-                        assert!((sum / lambda - 1.0).abs() < 1e-4, "{sum} vs {lambda}");
+                        if sum == 0.0 {
+                            assert_eq!(lambda, 0.0);
+                            continue;
+                        }
+                        counted += 1;
+                        // Relative, except where grazing cosines leave a sum near zero.
+                        let tolerance = 1e-4 * lambda + 1e-6;
+                        assert!((sum - lambda).abs() < tolerance, "{sum} vs {lambda}");
                     }
                 }
             }
         }
+        // Most lights are in front of most points.
+        assert!(counted > 4000, "{counted}");
+    }
+
+    /// The stored emission is within its steps of the given one.
+    #[test]
+    fn emission_is_stored_to_its_steps() {
+        let mut rng = Rng::new(&[43]);
+        for _ in 0..1000 {
+            let mut c = || 2.0 * rng.next_f32() - 1.0;
+            let m = Vec3::new(c(), c(), c()).clamp_length_max(1.0);
+            let iso = 0.125 * (c() + 1.0);
+            let (mq, iq) = quantized_emission(m, iso);
+            assert!(
+                (mq - m).abs().max_element() <= 0.5 / 127.0 + 1e-6,
+                "{m} {mq}"
+            );
+            assert!((iq - iso).abs() <= 0.125 / 255.0 + 1e-6, "{iso} {iq}");
+        }
+        assert_eq!(quantized_emission(Vec3::NEG_Y, 0.0), (Vec3::NEG_Y, 0.0));
+    }
+
+    /// A light whose grid lights all face away from x, or lie behind its tangent plane,
+    /// has no share there; one in front has its geometry term's weight: the total is
+    /// G_i(x) where the hierarchy is the single light itself (every level's centroid is p).
+    #[test]
+    fn a_single_light_weighs_its_geometry_term() {
+        let p = [Vec3::new(1.0, 1.0, 1.0)];
+        let n = [Vec3::NEG_Y];
+        let input = InputLights {
+            positions: &p,
+            intensity: &[Vec3::ONE],
+            normals: Some(&n),
+        };
+        let (grid, _) =
+            LightingGrid::build(&input, LevelCount::Fixed(3), Construction::Restrict).unwrap();
+        let iso = vec![0.0; grid.position.len()];
+        let part = Partition::new(
+            &grid,
+            ShadedLevels {
+                lowest: 0,
+                alpha: 1.0,
+            },
+            &iso,
+        );
+        let eps2 = 0.01;
+        // Below the light, facing it: the B_l sum to one at one distance, so Lambda = G.
+        let (x, nx) = (Vec3::new(1.0, 0.0, 1.0), Vec3::Y);
+        let expected = 1.0 / (1.0 + eps2);
+        let lambda = part.share_total(x, nx, p[0], n[0], eps2);
+        assert!((lambda - expected).abs() < 1e-5 * expected, "{lambda}");
+        // Facing away from it, or above it (behind its emission): nothing.
+        assert_eq!(part.share_total(x, -nx, p[0], n[0], eps2), 0.0);
+        let above = Vec3::new(1.0, 2.0, 1.0);
+        assert_eq!(part.share_total(above, -nx, p[0], n[0], eps2), 0.0);
     }
 }

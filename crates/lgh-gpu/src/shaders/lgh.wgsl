@@ -3,7 +3,8 @@
 // drawn among its lights in proportion to f_j = lum(B_l I_j G_j) by stratified inversion of
 // the running sum, and per sample the unbiased estimate's target (docs/design.md, "Unbiased
 // estimate"): the walk down to an S_1 light, one of its representative VPLs by contribution,
-// a shadow ray, and the gain (sum rho / SLOTS) colour / (G_j Lambda_i) of a visible VPL. It
+// a shadow ray, and the gain (sum rho / SLOTS) colour / Lambda_i of a visible VPL, Lambda_i
+// its shares weighted by their grid lights' geometry terms. It
 // writes A, S = mean V U_k gain and U = mean U_k; lgh-render's ratio estimator finishes them.
 // The CPU counterpart is lgh-render's methods/lgh (shade.rs, lights.rs); each pixel sums its
 // own terms in a fixed order, so the result does not depend on scheduling.
@@ -171,9 +172,29 @@ fn find_vertex(h: Hier, rows: u32, side: u32, v: vec3<u32>) -> u32 {
     return 0xffffffffu;
 }
 
+// A grid light's emission normal and isotropic share as lgh-core's partition stores them
+// (quantized_emission): m to 1/127 per component, the share to 1/1020.
+fn stored_emission(e: vec4<f32>) -> vec4<f32> {
+    let m = round(clamp(e.xyz, vec3<f32>(-1.0), vec3<f32>(1.0)) * 127.0) * (1.0 / 127.0);
+    let iso = round(clamp(e.w * 4.0, 0.0, 1.0) * 255.0) * (0.25 / 255.0);
+    return vec4<f32>(m, iso);
+}
+
+// The geometry term cos_x cos_v / (d^2 + eps^2) of a light at q with emission e (normal,
+// isotropic share) at x with normal nx (lgh_core::vpl::light_geometry).
+fn geometry(x: vec3<f32>, nx: vec3<f32>, q: vec3<f32>, e: vec4<f32>) -> f32 {
+    let d = q - x;
+    let d2 = dot(d, d);
+    let inv_d = inverseSqrt(d2);
+    let cos_x = dot(nx, d) * inv_d;
+    let cos_v = max(-dot(e.xyz, d) * inv_d, 0.0) + e.w;
+    return select(0.0, cos_x * cos_v / (d2 + params.eps2), cos_x > 0.0 && cos_v > 0.0 && d2 > 0.0);
+}
+
 // Lambda_i: the sum over the shaded levels of the blending weights at x of the grid lights
-// that VPL p is splatted to, each times its trilinear share (Partition::blend_total).
-fn blend_total(h: Hier, x: vec3<f32>, p: vec3<f32>) -> f32 {
+// that VPL p (normal np) is splatted to, each times its trilinear share and its geometry
+// term at x with its stored emission (Partition::share_total).
+fn share_total(h: Hier, x: vec3<f32>, nx: vec3<f32>, p: vec3<f32>, np: vec3<f32>) -> f32 {
     var total = 0.0;
     var rows = h.rows_base;
     for (var l = 1u; l < h.lowest; l++) {
@@ -184,7 +205,10 @@ fn blend_total(h: Hier, x: vec3<f32>, p: vec3<f32>) -> f32 {
         let r = h.alpha * cell_size(h, l);
         let fl = floors(h, l);
         if (l == 0u) {
-            total += blend(length(x - p) / r, fl.x, fl.y);
+            let g = geometry(x, nx, p, vec4<f32>(np, 0.0));
+            if (g > 0.0) {
+                total += blend(length(x - p) / r, fl.x, fl.y) * g;
+            }
             continue;
         }
         let hl = cell_size(h, l);
@@ -200,8 +224,10 @@ fn blend_total(h: Hier, x: vec3<f32>, p: vec3<f32>) -> f32 {
                 continue;
             }
             let fw = select(vec3<f32>(1.0) - f, f, d == vec3<u32>(1u));
-            let q = lights[h.grid_base + g].position.xyz;
-            total += fw.x * fw.y * fw.z * blend(length(q - x) / r, fl.x, fl.y);
+            let lg = lights[h.grid_base + g];
+            let q = lg.position.xyz;
+            let geo = geometry(x, nx, q, stored_emission(lg.normal));
+            total += fw.x * fw.y * fw.z * blend(length(q - x) / r, fl.x, fl.y) * geo;
         }
         rows += side * side + 1u;
     }
@@ -293,17 +319,19 @@ fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f3
     if (occluded_between(x, ng, q, nq, params.ray_eps)) {
         return vec4<f32>(0.0, 0.0, 0.0, 1.0);
     }
-    let lambda = blend_total(h, x, q);
-    let dj = lj.position.xyz - x;
-    let d2 = dot(dj, dj);
-    let inv_d = inverseSqrt(d2);
-    let cos_x = dot(n, dj) * inv_d;
-    let cos_v = max(-dot(lj.normal.xyz, dj) * inv_d, 0.0) + lj.normal.w;
-    let geo = select(0.0, cos_x * cos_v / (d2 + params.eps2), cos_x > 0.0 && cos_v > 0.0 && d2 > 0.0);
-    if (!(lambda > 0.0) || !(geo > 0.0)) {
+    let lambda = share_total(h, x, n, q, nq);
+    // A grid light's share was weighed with its stored emission: its own emission cosine
+    // over that one (ShadeLights::unbiased_gain; 1 for a VPL shaded as S_0).
+    var cosines = 1.0;
+    if (j >= h.grid_base) {
+        let w = normalize(lj.position.xyz - x);
+        let e = stored_emission(lj.normal);
+        cosines = (max(-dot(e.xyz, w), 0.0) + e.w) / (max(-dot(lj.normal.xyz, w), 0.0) + lj.normal.w);
+    }
+    if (!(lambda > 0.0)) {
         return vec4<f32>(0.0, 0.0, 0.0, 1.0);
     }
-    let gain = colour * mean_rho / (geo * lambda);
+    let gain = colour * mean_rho * (cosines / lambda);
     if (any(abs(gain) > vec3<f32>(3.0e38)) || any(gain != gain)) {
         return vec4<f32>(0.0, 0.0, 0.0, 1.0);
     }

@@ -6,12 +6,12 @@ use glam::Vec3;
 use lgh_core::blending::LevelRole;
 use lgh_core::lighting_grid::descent::Descent;
 use lgh_core::lighting_grid::lookup::{VertexLookup, VertexRows};
-use lgh_core::lighting_grid::partition::{Partition, ShadedLevels};
+use lgh_core::lighting_grid::partition::{Partition, ShadedLevels, quantized_emission};
 use lgh_core::lighting_grid::representative::{SLOTS, representatives, s1_representatives};
 use lgh_core::lighting_grid::{Construction, GridError, GridShape, LightingGrid};
 use lgh_core::reservoir::Reservoir;
 use lgh_core::rng::Rng;
-use lgh_core::vpl::{GridEmission, Vpls, light_irradiance};
+use lgh_core::vpl::{GridEmission, Vpls};
 use rayon::prelude::*;
 
 use crate::methods::lgh::light_batch::PackedLight;
@@ -268,14 +268,18 @@ impl ShadeLights {
             _ => Descent::default(),
         };
         let vpl_lights = if levels.lowest == 0 { count } else { 0 };
+        // The grid lights' isotropic shares, as add_hierarchy made them for the loop.
+        let grid_base = first + vpl_lights;
+        let partition = grid.filter(|_| !tables).map(|grid| {
+            let iso = &self.iso[grid_base..grid_base + grid.position.len()];
+            Partition::new(grid, levels, iso)
+        });
         self.hierarchies.push(Hierarchy {
             reps,
-            partition: grid
-                .filter(|_| !tables)
-                .map(|grid| Partition::new(grid, levels)),
+            partition,
             descent,
             first,
-            grid_base: first + vpl_lights,
+            grid_base,
             tables: tables.then(|| match grid {
                 Some(grid) => GridTables::new(grid, levels, slots.into_iter(), vpls, keeps),
                 None => GridTables::on_device(shape, levels, count),
@@ -481,31 +485,34 @@ impl ShadeLights {
     }
 
     /// The gain of a visible sample of the unbiased estimate at the pixel at `xp` with
-    /// normal `nx`: the gain [`ShadeLights::resolve_unbiased`] set, divided by G_j Lambda_i
-    /// (zero where either is zero).
+    /// normal `nx`: the gain [`ShadeLights::resolve_unbiased`] set, divided by Lambda_i, the
+    /// sum of its VPL's shares weighted by their grid lights' geometry terms, and by the
+    /// drawn light's emission cosine over the one its share was weighed with (zero where
+    /// either is zero; docs/design.md, "Unbiased estimate").
     fn unbiased_gain(&self, sample: &ShadowSample, xp: Vec3, nx: Vec3, eps2: f32) -> Vec3 {
         let j = sample.light as usize;
-        let Some(partition) = &self.hierarchy_of(j).partition else {
+        let hierarchy = self.hierarchy_of(j);
+        let Some(partition) = &hierarchy.partition else {
             return Vec3::ZERO;
         };
-        let lambda = partition.blend_total(xp, sample.q);
-        let geo = light_irradiance(
-            xp,
-            nx,
-            self.position[j],
-            self.normal[j],
-            self.iso[j],
-            Vec3::ONE,
-            eps2,
-        )
-        .x * std::f32::consts::PI;
-        if lambda <= 0.0 || geo <= 0.0 {
+        let lambda = partition.share_total(xp, nx, sample.q, sample.n, eps2);
+        // A VPL shaded as S_0 is weighed with its own geometry term, a grid light with its
+        // emission as the partition stores it.
+        let cosines = if j < hierarchy.grid_base {
+            1.0
+        } else {
+            let w = (self.position[j] - xp).normalize_or_zero();
+            let (m, iso) = quantized_emission(self.normal[j], self.iso[j]);
+            let stored = (-m.dot(w)).max(0.0) + iso;
+            stored / ((-self.normal[j].dot(w)).max(0.0) + self.iso[j])
+        };
+        if lambda <= 0.0 {
             return Vec3::ZERO;
         }
-        let gain = sample.gain / (geo * lambda);
-        // A light with a geometry term near the float minimum has a contribution near it
-        // too, and is all but never selected; an overflowed gain would turn the filter's
-        // sums into NaN.
+        let gain = sample.gain * (cosines / lambda);
+        // A Lambda_i near the float minimum (every grid light of the VPL at a grazing angle)
+        // belongs to a contribution near it too; an overflowed gain, or a drawn light with
+        // no emission towards the pixel, would turn the filter's sums into NaN.
         Vec3::select(gain.is_finite_mask(), gain, Vec3::ZERO)
     }
 
