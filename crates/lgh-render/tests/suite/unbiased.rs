@@ -2,7 +2,8 @@
 //! agrees with the brute force over the same VPLs where the paper's estimate is biased (its
 //! convergence pixel by pixel is in `accumulate.rs`).
 
-use lgh_render::image::metrics::diff;
+use lgh_render::image::ImageFormat;
+use lgh_render::image::metrics::{diff, display_bytes, flip_mean};
 use lgh_render::methods::brute::BRUTE;
 use lgh_render::methods::lgh::{Estimator, LGH, LghSettings};
 use lgh_render::{Image, RenderSettings, World};
@@ -52,4 +53,30 @@ fn two_rooms_mean_is_within_three_percent() {
     eprintln!("two rooms, mean rel_bias: unbiased {unbiased:+.4}, paper {paper:+.4}");
     assert!(unbiased.abs() <= 0.03, "unbiased {unbiased}");
     assert!(paper < -0.08, "paper {paper}");
+}
+
+/// The shares of the unbiased estimate weigh each grid light by its geometry term at the
+/// pixel (docs/design.md, "Unbiased estimate"), so that no sample drawn through a grid light
+/// at a grazing angle weighs hundreds of times the pixel's mean. On the two rooms (160x90,
+/// 10,000 VPLs, lgh's defaults) the mean FLIP against the brute force over the same VPLs
+/// over three seeds is at most 0.084: measured 0.080 (0.0845, 0.0781, 0.0773), and 0.088
+/// (0.0923, 0.0857, 0.0859) with shares by blending weight alone.
+#[test]
+fn geometry_weighted_shares_lower_the_error() {
+    let world = two_rooms();
+    let mut flip = 0.0;
+    for seed in 1..=3 {
+        let settings = |method| RenderSettings {
+            width: 160,
+            height: 90,
+            seed,
+            ..common::small_indirect(method, 10_000)
+        };
+        let bytes = |i: &Image| display_bytes(i, ImageFormat::Exr, world.scene.exposure);
+        let reference = common::render(&world, &settings(BRUTE)).indirect;
+        let image = common::render(&world, &settings(LGH)).indirect;
+        flip += flip_mean(&bytes(&image), &bytes(&reference), 160, 90).expect("flip") / 3.0;
+    }
+    eprintln!("two rooms, 160x90, 10K VPLs: mean FLIP {flip:.4}");
+    assert!(flip <= 0.084, "FLIP {flip}");
 }

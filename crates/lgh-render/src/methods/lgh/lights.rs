@@ -485,10 +485,10 @@ impl ShadeLights {
     }
 
     /// The gain of a visible sample of the unbiased estimate at the pixel at `xp` with
-    /// normal `nx`: the gain [`ShadeLights::resolve_unbiased`] set, divided by Lambda_i, the
-    /// sum of its VPL's shares weighted by their grid lights' geometry terms, and by the
-    /// drawn light's emission cosine over the one its share was weighed with (zero where
-    /// either is zero; docs/design.md, "Unbiased estimate").
+    /// normal `nx`: the gain [`ShadeLights::resolve_unbiased`] set, divided by Lambda_i (the
+    /// sum of its VPL's shares weighted by their grid lights' geometry terms) and multiplied
+    /// by the drawn light's emission cosine as the partition stores it over its own (zero
+    /// where Lambda_i is; docs/design.md, "Unbiased estimate").
     fn unbiased_gain(&self, sample: &ShadowSample, xp: Vec3, nx: Vec3, eps2: f32) -> Vec3 {
         let j = sample.light as usize;
         let hierarchy = self.hierarchy_of(j);
