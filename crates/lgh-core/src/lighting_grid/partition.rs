@@ -358,25 +358,17 @@ impl Partition {
                     }
                 }
             }
-            // light_geometry times B_l, branch-free: one division for 1 / |d| and
-            // 1 / (d^2 + eps^2), as the lighting loop's batches do.
             let (rise_off, fall_off) = role.floors();
             let mut b = [0.0f32; 8];
             for k in 0..8 {
                 let (d, (m, iso)) = (q[k].position - x, q[k].emission());
                 let d2 = d.length_squared();
-                let dist = d2.sqrt();
-                let den = d2 + eps2;
-                let inv = 1.0 / (dist * den);
-                let inv_d = inv * den;
-                let t = dist * inv_r;
+                let inv_d = d2.sqrt().recip();
+                let t = d2 * inv_d * inv_r;
                 let rising = (2.0 * t - 1.0).clamp(0.0, 1.0).max(rise_off);
                 let falling = (2.0 - t).clamp(0.0, 1.0).max(fall_off);
-                let cos_x = n_x.dot(d) * inv_d;
-                let cos_v = (-m.dot(d) * inv_d).max(0.0) + iso;
-                let ok = w[k] > 0.0 && d2 > 0.0 && cos_x > 0.0 && cos_v > 0.0;
-                let v = w[k] * rising.min(falling) * cos_x * cos_v * (inv * dist);
-                b[k] = if ok { v } else { 0.0 };
+                let g = light_geometry(d, d2, inv_d, n_x, m, iso, eps2);
+                b[k] = w[k] * rising.min(falling) * g;
             }
             // Pairwise, in the order of the lanes above.
             total += ((b[0] + b[1]) + (b[2] + b[3])) + ((b[4] + b[5]) + (b[6] + b[7]));
