@@ -87,8 +87,8 @@ const MAX_DENSE: usize = 1 << 21;
 
 /// What [`Partition::share_total`] reads of a grid light: its centroid p_g and, in one
 /// word, its emission normal m_g and isotropic share ([`quantized_emission`]): 16 bytes, so
-/// that the table's reads cost little more than the centroids' alone. Weights in full
-/// precision (32 bytes) took the function 3.3 times as long, from cache misses.
+/// that the table's reads cost little more than the centroids' alone (in full precision the
+/// cache misses tripled the function's time; docs/performance.md, thirty-fifth session).
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(16))]
 struct VertexLight {
@@ -128,8 +128,9 @@ impl VertexLight {
 
 /// The emission normal `m` (|m| <= 1) and isotropic share `iso` (at most 1/4, as
 /// [`crate::vpl::GridEmission::isotropic`] gives) as [`Partition`] weighs a grid light:
-/// each component of m to 1/127, the share to 1/1020. The unbiased estimate divides by the
-/// geometry term of the light it drew with these, so that its shares stay exact.
+/// each component of m to 1/127, the share to 1/1020. The unbiased estimate weighs the
+/// light it drew by its emission cosine with these over its exact one, so that the shares
+/// stay exact.
 #[must_use]
 pub fn quantized_emission(m: Vec3, iso: f32) -> (Vec3, f32) {
     VertexLight::new(Vec3::ZERO, m, iso).emission()
