@@ -8,15 +8,19 @@
 //! restriction builds exactly), and is shaded at x with the blending weight B_l(|x - p_g|),
 //! the distance taken to its centroid p_g, times its geometry term G_g(x) = cos_x cos_v /
 //! (|x - p_g|^2 + eps^2) (its normal m_g and isotropic share as the lighting loop shades
-//! it, stored to 8 bits: [`quantized_emission`]). Input light i is counted at x with the total weight
+//! it, stored to 8 bits: [`quantized_emission`]). Input light i is counted at x with the
+//! total weight
 //!
-//! Lambda_i(x) = sum over levels l, sum over the 8 vertices g of p_i's cell of level l,
-//! of w_g(p_i) B_l(|x - p_g|) G_g(x)
+//! Lambda_i(x) = sum over the admitted levels l, sum over the 8 vertices g of p_i's cell of
+//! level l, of w_g(p_i) B_l(|x - p_g|) G_g(x)
 //!
-//! (level 0, the input lights themselves as S_0, adds B_0(|x - p_i|) G_i(x)). The shares
-//! pi_ig(x) = w_g(p_i) B_l(|x - p_g|) G_g(x) / Lambda_i(x) sum to exactly one over the grid
-//! lights of all levels, so the sum over g of the sum over i of pi_ig f_i is the sum of the
-//! f_i, whatever the hierarchy's approximation.
+//! (level 0, the input lights themselves as S_0, adds B_0(|x - p_i|) G_i(x)). A level is
+//! admitted where its blending weight at the light's own distance is not zero,
+//! B_l(|x - p_i|) > 0: two levels at any distance, since the B_l of neighbouring levels
+//! overlap pairwise (Eq. 3). The shares pi_ig(x) = w_g(p_i) B_l(|x - p_g|) G_g(x) /
+//! Lambda_i(x) of the admitted levels' grid lights (zero for the others) sum to exactly one,
+//! so the sum over g of the sum over i of pi_ig f_i is the sum of the f_i, whatever the
+//! hierarchy's approximation.
 //!
 //! Any shares that sum to one keep the estimate unbiased. These are (up to the walk's and
 //! the representatives' draws) proportional to the probability that the lighting loop's
@@ -30,6 +34,15 @@
 //! the vertex instead would need no lookup of centroids, but at alpha = 1 it counts a light
 //! near x up to three times (the vertices of coarse levels are far from x even when all
 //! their light is near).
+//!
+//! The admission only restricts which grid lights share light i (a sample drawn through a
+//! level that is not admitted weighs zero), so the estimate stays unbiased wherever an
+//! admitted grid light of i can be drawn at x. It halves the cost of Lambda_i: without it
+//! every level whose centroids could lie within reach of B_l was evaluated, about four a
+//! call, and at nearly two thirds of those the weight was zero at all 8 corners. The
+//! admitted levels hold nearly all of a light's share anyway (images within rel_rmse 2e-4
+//! of the full sum with a reach of one cell around p_i; docs/performance.md, thirty-sixth
+//! session).
 
 use glam::{UVec3, Vec3};
 
@@ -50,35 +63,11 @@ pub struct ShadedLevels {
     pub alpha: f32,
 }
 
-/// How far a grid light's centroid can lie from its vertex, in cells: the diagonal of a cell
-/// (a centroid lies within one cell of its vertex along every axis).
-const VERTEX_REACH: f32 = 1.732_051;
-
-/// How far it can lie from the centre of a cell whose corner is its vertex: half a diagonal
-/// more.
-const CELL_REACH: f32 = 0.866_026 + VERTEX_REACH;
-
-/// B_l if it is the same at every distance in `near..=far` (radius `r`), else `None`.
-fn constant_blend(role: LevelRole, near: f32, far: f32, r: f32) -> Option<f32> {
-    let (ones_from, ones_to) = match role {
-        LevelRole::Only => return Some(1.0),
-        LevelRole::Lowest => (f32::NEG_INFINITY, r),
-        LevelRole::Middle => (r, r),
-        LevelRole::Top => (r, f32::INFINITY),
-    };
-    let (zero_below, zero_above) = match role {
-        LevelRole::Only => (f32::NEG_INFINITY, f32::INFINITY),
-        LevelRole::Lowest => (f32::NEG_INFINITY, 2.0 * r),
-        LevelRole::Middle => (0.5 * r, 2.0 * r),
-        LevelRole::Top => (0.5 * r, f32::INFINITY),
-    };
-    if far <= zero_below || near >= zero_above {
-        Some(0.0)
-    } else if near >= ones_from && far <= ones_to && ones_from < ones_to {
-        Some(1.0)
-    } else {
-        None
-    }
+/// Whether level `c` is admitted to Lambda_i(x) for an input light at distance `dist`
+/// from x: B_l(dist) > 0 (module docs).
+#[inline(always)]
+fn admitted(c: &LevelConstants, dist: f32) -> bool {
+    blend(c.role, dist, c.r) > 0.0
 }
 
 /// The largest level, in vertices, whose lights [`Partition`] keeps in a dense table
@@ -157,8 +146,7 @@ pub struct Partition {
 struct LevelConstants {
     l: u32,
     role: LevelRole,
-    /// h_l and 1 / h_l.
-    h: f32,
+    /// 1 / h_l.
     inv_h: f32,
     /// r_l = alpha h_l and 1 / r_l.
     r: f32,
@@ -236,7 +224,6 @@ impl Partition {
                 LevelConstants {
                     l,
                     role: LevelRole::of(l, levels.lowest, geometry.l_max),
-                    h,
                     inv_h: 1.0 / h,
                     r,
                     inv_r: 1.0 / r,
@@ -273,22 +260,35 @@ impl Partition {
         }
     }
 
+    /// Whether level `l` is admitted to Lambda_i(x) for the input light at `p` and the
+    /// shading point `x`: its blending weight at the light's own distance, B_l(|x - p|), is
+    /// not zero (module docs). A sample of light i drawn through a grid light of a level
+    /// that is not admitted weighs zero.
+    #[must_use]
+    pub fn admits(&self, l: u32, x: Vec3, p: Vec3) -> bool {
+        let k = l.wrapping_sub(self.levels.lowest) as usize;
+        self.shaded
+            .get(k)
+            .is_some_and(|c| admitted(c, (x - p).length()))
+    }
+
     /// Lambda_i(x) of the module docs for the input light at `p` with normal `n_p` and the
     /// shading point `x` with normal `n_x`, with the clamp `eps2` of the lighting loop.
     #[must_use]
     pub fn share_total(&self, x: Vec3, n_x: Vec3, p: Vec3, n_p: Vec3, eps2: f32) -> f32 {
         let origin = self.geometry.origin;
+        let dist = (x - p).length();
         let mut total = 0.0;
-        for &LevelConstants {
-            l,
-            role,
-            h,
-            inv_h,
-            r,
-            inv_r,
-            cells,
-        } in &self.shaded
-        {
+        for level in &self.shaded {
+            let LevelConstants {
+                l,
+                role,
+                inv_h,
+                r,
+                inv_r,
+                cells,
+                ..
+            } = *level;
             if l == 0 {
                 let d = p - x;
                 let d2 = d.length_squared();
@@ -299,15 +299,11 @@ impl Partition {
                 }
                 continue;
             }
-            // `locate`, multiplying by 1 / h_l.
-            let (c, f) = cell_of((p - origin) * inv_h, cells);
-            let centre = origin + (c.as_vec3() + Vec3::splat(0.5)) * h;
-            // Where B_l is zero at every distance the level's centroids can have, the level
-            // adds nothing.
-            let dc = (x - centre).length();
-            if constant_blend(role, dc - CELL_REACH * h, dc + CELL_REACH * h, r) == Some(0.0) {
+            if !admitted(level, dist) {
                 continue;
             }
+            // `locate`, multiplying by 1 / h_l.
+            let (c, f) = cell_of((p - origin) * inv_h, cells);
             // The 8 corners' lights and weights (no light: weight 0, at x), kept as whole
             // records: scattering them into per-axis lane arrays stored scalars that the
             // vector loads after them waited on (store forwarding failed), the largest cost
@@ -386,8 +382,9 @@ mod tests {
     use crate::vpl::GridEmission;
 
     /// The shares w_g(p_i) B_l(|x - p_g|) G_g(x) / Lambda_i of every input light, summed over
-    /// all grid lights of all levels by brute force, are one, for random lights, normals and
-    /// shading points, with and without S_0, at several alpha, with dense tables and rows.
+    /// all grid lights of the admitted levels by brute force, are one, for random lights,
+    /// normals and shading points, with and without S_0, at several alpha, with dense tables
+    /// and rows.
     #[test]
     fn shares_sum_to_one() {
         let mut rng = Rng::new(&[41]);
@@ -427,6 +424,11 @@ mod tests {
                         for l in lowest..=geom.l_max {
                             let role = LevelRole::of(l, lowest, geom.l_max);
                             let r = geom.radius(l, alpha);
+                            let admitted = blend(role, (x - pi).length(), r) > 0.0;
+                            assert_eq!(admitted, dense.admits(l, x, pi));
+                            if !admitted {
+                                continue;
+                            }
                             let g = |q: Vec3, m: Vec3, iso: f32| {
                                 let (d, d2) = (q - x, (q - x).length_squared());
                                 light_geometry(d, d2, d2.sqrt().recip(), nx, m, iso, eps2)
@@ -459,6 +461,40 @@ mod tests {
         }
         // Most lights are in front of most points.
         assert!(counted > 4000, "{counted}");
+    }
+
+    /// Two levels are admitted at any distance (the B_l of neighbouring levels overlap
+    /// pairwise), one where a level's weight is one; none outside the shaded levels.
+    #[test]
+    fn two_levels_are_admitted() {
+        let p: Vec<Vec3> = (0..64)
+            .map(|k| Vec3::new((k % 4) as f32, ((k / 4) % 4) as f32, (k / 16) as f32))
+            .collect();
+        let input = InputLights {
+            positions: &p,
+            intensity: &vec![Vec3::ONE; p.len()],
+            normals: None,
+        };
+        let (grid, _) =
+            LightingGrid::build(&input, LevelCount::Fixed(5), Construction::Restrict).unwrap();
+        let iso = vec![0.0; grid.position.len()];
+        let mut rng = Rng::new(&[47]);
+        for lowest in [0, 1] {
+            let part = Partition::new(&grid, ShadedLevels { lowest, alpha: 2.0 }, &iso);
+            for _ in 0..2000 {
+                let x = Vec3::new(20.0 * rng.next_f32() - 8.0, 1.5, 1.5);
+                let q = Vec3::splat(1.5);
+                let admitted = (0..=6).filter(|&l| part.admits(l, x, q)).count();
+                let d = (x - q).length();
+                let one = (lowest..=5).any(|l| {
+                    let role = LevelRole::of(l, lowest, 5);
+                    blend(role, d, grid.geometry.radius(l, 2.0)) == 1.0
+                });
+                assert_eq!(admitted, if one { 1 } else { 2 }, "{d}");
+            }
+            assert!(!part.admits(6, Vec3::ZERO, Vec3::ONE));
+            assert_eq!(part.admits(0, Vec3::ONE, Vec3::ONE), lowest == 0);
+        }
     }
 
     /// The stored emission is within its steps of the given one.

@@ -191,7 +191,8 @@ fn geometry(x: vec3<f32>, nx: vec3<f32>, q: vec3<f32>, e: vec4<f32>) -> f32 {
     return select(0.0, cos_x * cos_v / (d2 + params.eps2), cos_x > 0.0 && cos_v > 0.0 && d2 > 0.0);
 }
 
-// Lambda_i: the sum over the shaded levels of the blending weights at x of the grid lights
+// Lambda_i: the sum over the admitted levels (those whose blending weight at p's own
+// distance is not zero: Partition::admits) of the blending weights at x of the grid lights
 // that VPL p (normal np) is splatted to, each times its trilinear share and its geometry
 // term at x with its stored emission (Partition::share_total).
 fn share_total(h: Hier, x: vec3<f32>, nx: vec3<f32>, p: vec3<f32>, np: vec3<f32>) -> f32 {
@@ -214,6 +215,10 @@ fn share_total(h: Hier, x: vec3<f32>, nx: vec3<f32>, p: vec3<f32>, np: vec3<f32>
         let hl = cell_size(h, l);
         let cells = 1u << (h.l_max - l);
         let side = cells + 1u;
+        if (!(blend(length(x - p) / r, fl.x, fl.y) > 0.0)) {
+            rows += side * side + 1u;
+            continue;
+        }
         let u = (p - h.origin) * (1.0 / hl);
         let c = vec3<u32>(clamp(u, vec3<f32>(0.0), vec3<f32>(f32(cells - 1u))));
         let f = clamp(u - vec3<f32>(c), vec3<f32>(0.0), vec3<f32>(1.0));
@@ -324,6 +329,10 @@ fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f3
     // over that one (ShadeLights::unbiased_gain; 1 for a VPL shaded as S_0).
     var cosines = 1.0;
     if (j >= h.grid_base) {
+        // Only the levels admitted at the VPL's own distance share its light.
+        if (!(blend(length(x - q) / lj.intensity.w, lj.role.x, lj.role.y) > 0.0)) {
+            return vec4<f32>(0.0, 0.0, 0.0, 1.0);
+        }
         let w = normalize(lj.position.xyz - x);
         let e = stored_emission(lj.normal);
         cosines = (max(-dot(e.xyz, w), 0.0) + e.w) / (max(-dot(lj.normal.xyz, w), 0.0) + lj.normal.w);

@@ -488,7 +488,8 @@ impl ShadeLights {
     /// normal `nx`: the gain [`ShadeLights::resolve_unbiased`] set, divided by Lambda_i (the
     /// sum of its VPL's shares weighted by their grid lights' geometry terms) and multiplied
     /// by the drawn light's emission cosine as the partition stores it over its own (zero
-    /// where Lambda_i is; docs/design.md, "Unbiased estimate").
+    /// where Lambda_i is, and where the drawn light's level is not admitted at the VPL's
+    /// distance, [`Partition::admits`]; docs/design.md, "Unbiased estimate").
     fn unbiased_gain(&self, sample: &ShadowSample, xp: Vec3, nx: Vec3, eps2: f32) -> Vec3 {
         let j = sample.light as usize;
         let hierarchy = self.hierarchy_of(j);
@@ -500,6 +501,9 @@ impl ShadeLights {
         // emission as the partition stores it.
         let cosines = if j < hierarchy.grid_base {
             1.0
+        } else if !partition.admits(u32::from(self.level[j]), xp, sample.q) {
+            // Light i's shares are among the levels admitted at its own distance only.
+            return Vec3::ZERO;
         } else {
             let w = (self.position[j] - xp).normalize_or_zero();
             let (m, iso) = quantized_emission(self.normal[j], self.iso[j]);
