@@ -324,12 +324,12 @@ fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f3
     if (occluded_between(x, ng, q, nq, params.ray_eps)) {
         return vec4<f32>(0.0, 0.0, 0.0, 1.0);
     }
-    let lambda = share_total(h, x, n, q, nq);
     // A grid light's share was weighed with its stored emission: its own emission cosine
     // over that one (ShadeLights::unbiased_gain; 1 for a VPL shaded as S_0).
     var cosines = 1.0;
     if (j >= h.grid_base) {
-        // Only the levels admitted at the VPL's own distance share its light.
+        // Only the levels admitted at the VPL's own distance share its light (checked
+        // before Lambda_i, which such a sample does not need).
         if (!(blend(length(x - q) / lj.intensity.w, lj.role.x, lj.role.y) > 0.0)) {
             return vec4<f32>(0.0, 0.0, 0.0, 1.0);
         }
@@ -337,6 +337,7 @@ fn shadow_sample(x: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, j: u32, u_k: vec3<f3
         let e = stored_emission(lj.normal);
         cosines = (max(-dot(e.xyz, w), 0.0) + e.w) / (max(-dot(lj.normal.xyz, w), 0.0) + lj.normal.w);
     }
+    let lambda = share_total(h, x, n, q, nq);
     if (!(lambda > 0.0)) {
         return vec4<f32>(0.0, 0.0, 0.0, 1.0);
     }

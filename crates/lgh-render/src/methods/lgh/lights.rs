@@ -496,9 +496,9 @@ impl ShadeLights {
         let Some(partition) = &hierarchy.partition else {
             return Vec3::ZERO;
         };
-        let lambda = partition.share_total(xp, nx, sample.q, sample.n, eps2);
         // A VPL shaded as S_0 is weighed with its own geometry term, a grid light with its
-        // emission as the partition stores it.
+        // emission as the partition stores it. (Checked before Lambda_i, which a sample of
+        // a level not admitted does not need.)
         let cosines = if j < hierarchy.grid_base {
             1.0
         } else if !partition.admits(u32::from(self.level[j]), xp, sample.q) {
@@ -510,6 +510,7 @@ impl ShadeLights {
             let stored = (-m.dot(w)).max(0.0) + iso;
             stored / ((-self.normal[j].dot(w)).max(0.0) + self.iso[j])
         };
+        let lambda = partition.share_total(xp, nx, sample.q, sample.n, eps2);
         if lambda <= 0.0 {
             return Vec3::ZERO;
         }
