@@ -222,17 +222,29 @@ impl TileBounds {
         self.plane[k] = self.plane[k].min(ns.dot(p));
     }
 
-    /// False only if no surface point of the tile can lie in the sphere (`c`, `r`) of depth
-    /// range [`lo`, `hi`] in front of its tangent plane: the ranges do not meet, or in every
-    /// slice the sphere misses the box, or `c` lies behind every point's tangent plane
-    /// (n_x . (c - x) <= 0 for every point x of the slice, whose light is then zero: bounded
+    /// Whether any lane of [`TileBounds::reach_lanes`] may hold a point the light reaches.
+    #[cfg(test)]
+    fn may_reach(&self, lo: f32, hi: f32, c: Vec3, r: f32, m: Vec3, hole: f32) -> bool {
+        self.reach_lanes(lo, hi, c, r, m, hole) != 0
+    }
+
+    /// Per lane (a tile's depth slice k, a group's quadrant k), bit k clear only if no
+    /// surface point of the lane can lie in the sphere (`c`, `r`) of depth
+    /// range [`lo`, `hi`] in front of its tangent plane: the depth ranges do not meet (every
+    /// bit clear), or the sphere misses the lane's box, or `c` lies behind every point's tangent plane
+    /// (n_x . (c - x) <= 0 for every point x of the lane, whose light is then zero: bounded
     /// by n_s . c - min n_s . x + max |n_x - n_s| |c - x|), or, for a light with emission
     /// normal `m` not zero, every point lies behind the light's plane (m . (x - c) <= 0), or
     /// every point lies within `hole` of `c` ([`BinLights::holes`]).
+    ///
+    /// A tile of a group's quadrant k that the light reaches has bit k of the group set (its
+    /// boxes lie in the quadrant's box, its depth range in the group's, and the bounds are
+    /// monotone in them), so the binning skips the tiles of the quadrants whose bit is
+    /// clear, and its lists stay those of testing every tile.
     #[inline]
-    pub(super) fn may_reach(&self, lo: f32, hi: f32, c: Vec3, r: f32, m: Vec3, hole: f32) -> bool {
+    pub(super) fn reach_lanes(&self, lo: f32, hi: f32, c: Vec3, r: f32, m: Vec3, hole: f32) -> u32 {
         if self.zmin > hi || self.zmax < lo {
-            return false;
+            return 0;
         }
         // Squared distances from c to each box, nearest and farthest, and n_s . c, four
         // boxes at once.
@@ -265,7 +277,7 @@ impl TileBounds {
         // An empty slice holds no point (its infinite distance would pass a light of
         // infinite reach).
         let points = Vec4::from_array(self.lo[0]).cmple(Vec4::from_array(self.hi[0]));
-        (d2.cmple(Vec4::splat(r * r)) & points & !behind & !unlit & !inside).any()
+        (d2.cmple(Vec4::splat(r * r)) & points & !behind & !unlit & !inside).bitmask()
     }
 }
 
@@ -374,13 +386,16 @@ mod tests {
                     for ty in 0..all.tiles_y {
                         for tx in 0..all.tiles_x {
                             let group = all.group(s, tx / GROUP, ty / GROUP);
-                            let in_group = group.may_reach(lo, hi, c, r, m, hole);
+                            let quadrant = usize::from(ty % GROUP >= GROUP / 2) * 2
+                                + usize::from(tx % GROUP >= GROUP / 2);
+                            let lanes = group.reach_lanes(lo, hi, c, r, m, hole);
+                            let in_group = lanes & (1 << quadrant) != 0;
                             if all.get(s, tx, ty).may_reach(lo, hi, c, r, m, hole) {
                                 tile_hits += 1;
                                 assert!(
                                     in_group,
                                     "n {n}, light {light} at {c} (r {r}, m {m}, hole {hole}): \
-                                     tile ({tx}, {ty}) of sub-image {s} reached, its group not"
+                                     tile ({tx}, {ty}) of sub-image {s} reached, its group's quadrant not"
                                 );
                             } else if !in_group {
                                 group_misses += 1;

@@ -127,20 +127,29 @@ impl TileBins {
                     let m = facing.get(i).copied().unwrap_or(Vec3::ZERO);
                     let hole = holes.get(i).copied().unwrap_or(0.0);
                     let (tx0, tx1, ty0, ty1) = (x0 / tile, x1 / tile, y0 / tile, y1 / tile);
-                    let reach = |b: &TileBounds| b.may_reach(lo, hi, centres[i], radii[i], m, hole);
+                    let lanes =
+                        |b: &TileBounds| b.reach_lanes(lo, hi, centres[i], radii[i], m, hole);
                     // Group by group, each tested first where it holds more than one of
-                    // the rectangle's tiles (a group that rejects the light rejects them all).
+                    // the rectangle's tiles (a group that rejects the light rejects them all;
+                    // a quadrant of it whose lane rejects the light, its tiles).
                     for gy in ty0 / GROUP..=ty1 / GROUP {
                         let rows = ty0.max(gy * GROUP)..=ty1.min(gy * GROUP + GROUP - 1);
                         for gx in tx0 / GROUP..=tx1 / GROUP {
                             let cols = tx0.max(gx * GROUP)..=tx1.min(gx * GROUP + GROUP - 1);
                             let several = rows.start() != rows.end() || cols.start() != cols.end();
-                            if several && !reach(all.group(s, gx, gy)) {
+                            let quadrants = if several {
+                                lanes(all.group(s, gx, gy))
+                            } else {
+                                0b1111
+                            };
+                            if quadrants == 0 {
                                 continue;
                             }
                             for ty in rows.clone() {
+                                let lower = usize::from(ty % GROUP >= GROUP / 2) * 2;
                                 for tx in cols.clone() {
-                                    if reach(all.get(s, tx, ty)) {
+                                    let q = lower + usize::from(tx % GROUP >= GROUP / 2);
+                                    if quadrants & (1 << q) != 0 && lanes(all.get(s, tx, ty)) != 0 {
                                         pairs.push((ty * tiles_x + tx, i as u32));
                                     }
                                 }

@@ -78,7 +78,7 @@ fn light_span(i: u32) -> Span {
 
 // False only if no surface point of the tile of bounds `b` can lie in light i's sphere in
 // front of its tangent plane and, for a light with normal m, in front of the light's own
-// plane, and farther than `hole` from it (lgh-render's TileBounds::may_reach).
+// plane, and farther than `hole` from it (lgh-render's TileBounds::reach_lanes, any lane).
 // An empty tile or slice holds no point and keeps no light, whatever its reach.
 fn may_reach(b: TileBounds, s: Span, c: vec3<f32>, r: f32, m: vec3<f32>, hole: f32) -> bool {
     let facing = any(m != vec3<f32>(0.0));
