@@ -244,36 +244,45 @@ impl ShadeLights {
         // an S_1 light), which are then not made.
         let drawn = drawn.filter(|d| d.len() == shape.level_range(1).len());
         let input = vpls.as_input();
-        let (reps, slots): (Vec<RepSet>, Vec<[u32; SLOTS]>) = match (tables, drawn, grid) {
-            (true, _, _) if keeps.representatives => (Vec::new(), Vec::new()),
-            (true, Some(d), _) => (Vec::new(), d.to_vec()),
-            (true, None, Some(grid)) => {
-                (Vec::new(), s1_representatives(grid, &input, seed, |s| *s))
+        let vpl_lights = if levels.lowest == 0 { count } else { 0 };
+        // The grid lights' isotropic shares, as add_hierarchy made them for the loop.
+        let grid_base = first + vpl_lights;
+        let iso = &self.iso;
+        // The three parts are independent: made side by side, so that one's serial steps
+        // (sorts, prefix sums, allocations) overlap another's parallel ones.
+        let representatives = || -> (Vec<RepSet>, Vec<[u32; SLOTS]>) {
+            match (tables, drawn, grid) {
+                (true, _, _) if keeps.representatives => (Vec::new(), Vec::new()),
+                (true, Some(d), _) => (Vec::new(), d.to_vec()),
+                (true, None, Some(grid)) => {
+                    (Vec::new(), s1_representatives(grid, &input, seed, |s| *s))
+                }
+                (false, Some(d), _) => (
+                    d.par_iter().map(|s| RepSet::of(s, vpls)).collect(),
+                    Vec::new(),
+                ),
+                (false, None, Some(grid)) => (
+                    s1_representatives(grid, &input, seed, |s| RepSet::of(s, vpls)),
+                    Vec::new(),
+                ),
+                (_, None, None) => (Vec::new(), Vec::new()),
             }
-            (false, Some(d), _) => (
-                d.par_iter().map(|s| RepSet::of(s, vpls)).collect(),
-                Vec::new(),
-            ),
-            (false, None, Some(grid)) => (
-                s1_representatives(grid, &input, seed, |s| RepSet::of(s, vpls)),
-                Vec::new(),
-            ),
-            (_, None, None) => (Vec::new(), Vec::new()),
         };
         // The walk's children, unless the device makes them from its own copy of the grid.
-        let descent = match grid {
+        let descent = || match grid {
             Some(grid) if !(tables && keeps.lookups) => {
                 Descent::new(VertexLookup::new(grid, &VertexRows::new(grid)))
             }
             _ => Descent::default(),
         };
-        let vpl_lights = if levels.lowest == 0 { count } else { 0 };
-        // The grid lights' isotropic shares, as add_hierarchy made them for the loop.
-        let grid_base = first + vpl_lights;
-        let partition = grid.filter(|_| !tables).map(|grid| {
-            let iso = &self.iso[grid_base..grid_base + grid.position.len()];
-            Partition::new(grid, levels, iso)
-        });
+        let partition = || {
+            grid.filter(|_| !tables).map(|grid| {
+                let iso = &iso[grid_base..grid_base + grid.position.len()];
+                Partition::new(grid, levels, iso)
+            })
+        };
+        let ((reps, slots), (descent, partition)) =
+            rayon::join(representatives, || rayon::join(descent, partition));
         self.hierarchies.push(Hierarchy {
             reps,
             partition,
