@@ -229,9 +229,9 @@ impl TileBounds {
     }
 
     /// Per lane (a tile's depth slice k, a group's quadrant k), bit k clear only if no
-    /// surface point of the lane can lie in the sphere (`c`, `r`) of depth
-    /// range [`lo`, `hi`] in front of its tangent plane: the depth ranges do not meet (every
-    /// bit clear), or the sphere misses the lane's box, or `c` lies behind every point's tangent plane
+    /// surface point of the lane can lie in the sphere (`c`, `r`) of depth range [`lo`,
+    /// `hi`] in front of its tangent plane: the depth ranges do not meet (every bit clear),
+    /// or the sphere misses the lane's box, or `c` lies behind every point's tangent plane
     /// (n_x . (c - x) <= 0 for every point x of the lane, whose light is then zero: bounded
     /// by n_s . c - min n_s . x + max |n_x - n_s| |c - x|), or, for a light with emission
     /// normal `m` not zero, every point lies behind the light's plane (m . (x - c) <= 0), or
@@ -345,9 +345,10 @@ mod tests {
         g
     }
 
-    /// A group may reach every light that one of its tiles may reach, so that skipping the
-    /// tiles of a group that rejects a light lists exactly what testing every tile lists;
-    /// and the groups do reject lights that their tiles would have tested.
+    /// A group's quadrant (its lane of [`TileBounds::reach_lanes`]) may reach every light
+    /// that one of the quadrant's tiles may reach, so that skipping the tiles of a group or
+    /// quadrant that rejects a light lists exactly what testing every tile lists; and the
+    /// quadrants do reject lights that their tiles would have tested.
     #[test]
     fn a_group_reaches_every_light_its_tiles_reach() {
         let mut rng = Rng::new(&[77]);
@@ -395,7 +396,8 @@ mod tests {
                                 assert!(
                                     in_group,
                                     "n {n}, light {light} at {c} (r {r}, m {m}, hole {hole}): \
-                                     tile ({tx}, {ty}) of sub-image {s} reached, its group's quadrant not"
+                                     tile ({tx}, {ty}) of sub-image {s} reached, its \
+                                     quadrant of the group not"
                                 );
                             } else if !in_group {
                                 group_misses += 1;
