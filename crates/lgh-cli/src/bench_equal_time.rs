@@ -487,7 +487,8 @@ mod tests {
         let names = |a: &QualityBenchArgs| curves(a).into_iter().map(|c| c.0).collect::<Vec<_>>();
         let alone = ["--interleaves", "2", "--shadow-samples", ""];
         assert_eq!(names(&parsed(&alone)), ["lgh", "slc"]);
-        assert_eq!(curves(&parsed(&[])).len(), 2 * 3 + 3);
+        // 2 interleavings x 4 shadow-sample counts for lgh, 4 counts for slc.
+        assert_eq!(curves(&parsed(&[])).len(), 2 * 4 + 4);
         let a = parsed(&[
             "--interleaves",
             "2,4",
