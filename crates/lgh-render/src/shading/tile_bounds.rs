@@ -110,8 +110,7 @@ impl AllBounds {
                     let (s, gx) = (k / groups_x as usize, k as u32 % groups_x);
                     for ty in gy * GROUP..((gy + 1) * GROUP).min(tiles_y) {
                         for tx in gx * GROUP..((gx + 1) * GROUP).min(tiles_x) {
-                            let quadrant = usize::from(ty - gy * GROUP >= GROUP / 2) * 2
-                                + usize::from(tx - gx * GROUP >= GROUP / 2);
+                            let quadrant = quadrant(tx, ty);
                             group.merge(quadrant, all.get(s, tx, ty));
                         }
                     }
@@ -133,6 +132,13 @@ impl AllBounds {
     pub(super) fn group(&self, s: usize, gx: u32, gy: u32) -> &TileBounds {
         &self.groups[(gy as usize * self.n2 + s) * self.groups_x as usize + gx as usize]
     }
+}
+
+/// The quadrant of its group that tile (`tx`, `ty`) lies in: the lane of the group's bounds
+/// that holds its boxes (0 and 1 the upper two, left then right; 2 and 3 the lower two).
+#[inline]
+pub(super) fn quadrant(tx: u32, ty: u32) -> usize {
+    usize::from(ty % GROUP >= GROUP / 2) * 2 + usize::from(tx % GROUP >= GROUP / 2)
 }
 
 /// Depth slices of a tile's range that get their own bounding box of surface points (the
@@ -387,8 +393,7 @@ mod tests {
                     for ty in 0..all.tiles_y {
                         for tx in 0..all.tiles_x {
                             let group = all.group(s, tx / GROUP, ty / GROUP);
-                            let quadrant = usize::from(ty % GROUP >= GROUP / 2) * 2
-                                + usize::from(tx % GROUP >= GROUP / 2);
+                            let quadrant = quadrant(tx, ty);
                             let lanes = group.reach_lanes(lo, hi, c, r, m, hole);
                             let in_group = lanes & (1 << quadrant) != 0;
                             if all.get(s, tx, ty).may_reach(lo, hi, c, r, m, hole) {

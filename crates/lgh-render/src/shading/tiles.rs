@@ -16,8 +16,8 @@ use rayon::prelude::*;
 
 use crate::passes::gbuffer::GBuffer;
 use crate::shading::interleave::Lattice;
-use crate::shading::tile_bounds::TileBounds;
 pub use crate::shading::tile_bounds::{AllBounds, DEPTH_SLICES, GROUP};
+use crate::shading::tile_bounds::{TileBounds, quadrant};
 
 /// Lights binned into screen tiles, as a compressed sparse row table.
 #[derive(Clone, Debug, Default)]
@@ -146,9 +146,8 @@ impl TileBins {
                                 continue;
                             }
                             for ty in rows.clone() {
-                                let lower = usize::from(ty % GROUP >= GROUP / 2) * 2;
                                 for tx in cols.clone() {
-                                    let q = lower + usize::from(tx % GROUP >= GROUP / 2);
+                                    let q = quadrant(tx, ty);
                                     if quadrants & (1 << q) != 0 && lanes(all.get(s, tx, ty)) != 0 {
                                         pairs.push((ty * tiles_x + tx, i as u32));
                                     }
