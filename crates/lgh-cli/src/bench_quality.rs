@@ -113,7 +113,9 @@ pub struct QualityBenchArgs {
     /// --equal-time: VPLs of each reference frame.
     #[arg(long, default_value_t = 20_000, value_parser = crate::caps::count(crate::caps::MAX_BENCH_VPLS))]
     pub reference_vpls: usize,
-    /// --equal-time: renders per point; its time is their median.
+    /// --equal-time: renders per point, each with its own seed (VPL set, shadow samples,
+    /// SLC ranges): its time is their median, its errors their mean (rel_rmse: the root mean
+    /// square).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub runs: u32,
     /// Threads and output.

@@ -103,6 +103,15 @@ fn equal_time_sweeps_both_methods_against_a_cached_reference() {
             .collect()
     };
     assert_eq!(flips(&again, "cornell"), flips(&v, "cornell"));
+    // A second render per point has its own seed: every point's errors change (the same
+    // seed would repeat the first render's).
+    let mut two = args(&["builtin:cornell"], &["--reference", s(cornell)]);
+    let runs = two.iter().position(|a| a == "--runs").unwrap();
+    two[runs + 1] = "2".into();
+    let two = run(two);
+    for (a, b) in flips(&two, "cornell").iter().zip(flips(&v, "cornell")) {
+        assert_ne!(*a, b);
+    }
     // One reference file a scene, of the benchmark's size.
     assert_error(
         &lgh(&args(
