@@ -13,8 +13,10 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use lgh_render::methods::lgh::LGH;
 use lgh_render::methods::slc::SLC;
-use lgh_render::accumulate::frame_seed;
+use lgh_core::rng::hash;
 use lgh_render::{Image, RenderSettings, World};
+#[cfg(doc)]
+use lgh_render::accumulate::frame_seed;
 
 use crate::bench_cmd::open_scene;
 use crate::bench_quality::{Point, QualityBenchArgs, indirect_only, measure, ms, render};
@@ -187,9 +189,8 @@ pub fn pick(points: &[Point], scene: &str, method: &str, budget: f64) -> Option<
 
 /// The sweep of one method on one scene: each VPL count in turn until the time passes the
 /// largest budget (larger counts only take longer). Each point is `--runs` renders, each
-/// with its own seed (its own VPL set, shadow samples and SLC ranges, as the frames of an
-/// accumulation, [`frame_seed`]): its time is their median, its errors their mean
-/// ([`over_runs`]). One render's errors depend on its VPL set: where a few hundred pixels
+/// with its own seed ([`sweep_seed`]: its own VPL set, shadow samples and SLC ranges): its
+/// time is their median, its errors their mean ([`over_runs`]). One render's errors depend on its VPL set: where a few hundred pixels
 /// of near-field light hold half the squared error (the conference room lit by a spot
 /// aimed at its ceiling), one seed's rel_rmse of the same method moved from 0.15 to 0.40.
 fn sweep(
@@ -208,7 +209,7 @@ fn sweep(
         for run in 0..args.runs.max(1) {
             let mut s = RenderSettings {
                 vpls: vpls as usize,
-                seed: frame_seed(settings.seed, run),
+                seed: sweep_seed(run),
                 ..settings.clone()
             };
             s.slc.frame_seed = settings.slc.frame_seed.wrapping_add(run);
@@ -233,6 +234,19 @@ fn sweep(
         }
     }
     Ok(out)
+}
+
+/// Random-stream tag of the sweep's seeds.
+const STREAM_SWEEP: u64 = 0x5eed_e7;
+
+/// The seed of render `run` of each point of the sweep. Never one of the reference's frames'
+/// seeds ([`frame_seed`] of seed 0): light paths with the same seed are the same paths, so a
+/// render with a reference frame's seed would have its VPLs (a prefix of that frame's) and
+/// share their noise with the reference, which lowered its error (against the mean of the
+/// first 24 frames of 48 more than against all 48).
+#[must_use]
+pub fn sweep_seed(run: u32) -> u64 {
+    hash(&[STREAM_SWEEP, u64::from(run)])
 }
 
 /// A point's errors from its renders' (rel_rmse, FLIP, rel_bias): rel_rmse as the root mean
@@ -578,6 +592,17 @@ mod tests {
         let (rmse, flip, bias) = over_runs(&[(0.3, 0.05, -0.02), (0.4, 0.07, 0.04)]);
         assert!((rmse - 0.125f64.sqrt()).abs() < 1e-12, "{rmse}");
         assert!((flip - 0.06).abs() < 1e-12 && (bias - 0.01).abs() < 1e-12);
+    }
+
+    /// The sweep's renders never repeat a reference frame's seed (the same light paths).
+    #[test]
+    fn the_sweep_never_draws_a_reference_frames_paths() {
+        let frames: std::collections::HashSet<u64> = (0..10_000)
+            .map(|k| lgh_render::accumulate::frame_seed(0, k))
+            .collect();
+        let runs: std::collections::HashSet<u64> = (0..1000).map(sweep_seed).collect();
+        assert_eq!(runs.len(), 1000);
+        assert!(runs.is_disjoint(&frames));
     }
 
     /// Each method is taken at its best point within the budget, per metric; lgh wins only
