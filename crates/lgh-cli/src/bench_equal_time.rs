@@ -11,12 +11,12 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use lgh_render::methods::lgh::LGH;
-use lgh_render::methods::slc::SLC;
 use lgh_core::rng::hash;
-use lgh_render::{Image, RenderSettings, World};
 #[cfg(doc)]
 use lgh_render::accumulate::frame_seed;
+use lgh_render::methods::lgh::LGH;
+use lgh_render::methods::slc::SLC;
+use lgh_render::{Image, RenderSettings, World};
 
 use crate::bench_cmd::open_scene;
 use crate::bench_quality::{Point, QualityBenchArgs, indirect_only, measure, ms, render};
@@ -237,7 +237,7 @@ fn sweep(
 }
 
 /// Random-stream tag of the sweep's seeds.
-const STREAM_SWEEP: u64 = 0x5eed_e7;
+const STREAM_SWEEP: u64 = 0x005e_ede7;
 
 /// The seed of render `run` of each point of the sweep. Never one of the reference's frames'
 /// seeds ([`frame_seed`] of seed 0): light paths with the same seed are the same paths, so a
