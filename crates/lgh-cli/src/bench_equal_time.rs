@@ -190,9 +190,10 @@ pub fn pick(points: &[Point], scene: &str, method: &str, budget: f64) -> Option<
 /// The sweep of one method on one scene: each VPL count in turn until the time passes the
 /// largest budget (larger counts only take longer). Each point is `--runs` renders, each
 /// with its own seed ([`sweep_seed`]: its own VPL set, shadow samples and SLC ranges): its
-/// time is their median, its errors their mean ([`over_runs`]). One render's errors depend on its VPL set: where a few hundred pixels
-/// of near-field light hold half the squared error (the conference room lit by a spot
-/// aimed at its ceiling), one seed's rel_rmse of the same method moved from 0.15 to 0.40.
+/// time is their median, its errors their mean ([`over_runs`]). One render's errors depend
+/// on its VPL set: where a few hundred pixels of near-field light hold half the squared
+/// error (the conference room lit by a spot aimed at its ceiling), one seed's rel_rmse of
+/// the same method was 0.15 and another's 0.40.
 fn sweep(
     world: &World,
     args: &QualityBenchArgs,
@@ -241,9 +242,8 @@ const STREAM_SWEEP: u64 = 0x005e_ede7;
 
 /// The seed of render `run` of each point of the sweep. Never one of the reference's frames'
 /// seeds ([`frame_seed`] of seed 0): light paths with the same seed are the same paths, so a
-/// render with a reference frame's seed would have its VPLs (a prefix of that frame's) and
-/// share their noise with the reference, which lowered its error (against the mean of the
-/// first 24 frames of 48 more than against all 48).
+/// render with a reference frame's seed would have its VPLs (a prefix of that frame's), and
+/// its VPL noise would not be independent of the reference's.
 #[must_use]
 pub fn sweep_seed(run: u32) -> u64 {
     hash(&[STREAM_SWEEP, u64::from(run)])
